@@ -1,1 +1,33 @@
-//! placeholder, replaced below
+//! Closed-form curvature of the Amenta–Kil MLS point-set surface, after Yang & Qian,
+//! *Direct Computing of Surface Curvatures for Point-Set Surfaces* (2007).
+//!
+//! From points `q_i` with oriented unit normals `v_i` and one Gaussian scale `h`, the normal
+//! field n(x) (Eq. 2) and the energy e (Eq. 4) define the MLS surface as the zero set of g
+//! (Eq. 5, 7). This crate evaluates g, its gradient and Hessian in closed form ([`field`]),
+//! turns them into curvature ([`curvature()`]), projects points onto the surface
+//! ([`projection`]), and does both over whole clouds ([`MlsSurface`]).
+//!
+//! **Sign convention.** Curvature is positive where the surface bends away from the oriented
+//! normal: a unit sphere with outward normals has `k1 = k2 = mean = gauss = 1`;
+//! `mean = (k1 + k2)/2`, `k1 ≥ k2`. Flipping every normal flips `k1`, `k2` and `mean`, not
+//! `gauss`.
+//!
+//! Architecture invariant: this crate does no I/O and holds no generic dual-number code.
+
+pub mod curvature;
+pub mod error;
+pub mod field;
+pub mod kernel;
+pub mod math;
+pub mod projection;
+pub mod status;
+pub mod surface;
+
+pub use curvature::{Curvature, curvature};
+pub use error::ConfigError;
+pub use field::{Implicit, NormalField, Sample};
+pub use kernel::{Cutoff, Kernel};
+pub use math::{Matrix, Point, UnitNormal, Vector};
+pub use projection::ProjectionConfig;
+pub use status::PointStatus;
+pub use surface::{Evaluator, MlsConfig, MlsSurface, Parallelism, PointResult, SurfacePoint};

@@ -1,0 +1,84 @@
+//! Closed form (mls-core) against the automatic derivative (mls-ad) on small random clouds.
+//! The exhaustive sweep is `cargo xtask validate`; this is the quick version run by `cargo test`.
+
+use mls_core::field::{FieldScratch, evaluate};
+use mls_core::{Point, Sample, Vector};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+const SEED: u64 = 0x5eed_0002;
+
+fn rel(a: f64, b: f64, scale: f64) -> f64 {
+    (a - b).abs() / scale.max(f64::MIN_POSITIVE)
+}
+
+/// A random patch of a sphere of radius 1 with normals tilted by up to 0.1 rad.
+fn cloud(rng: &mut ChaCha8Rng, n: usize) -> Vec<Sample> {
+    (0..n)
+        .map(|_| {
+            let dir = Vector::new(
+                rng.random_range(-0.3..0.3),
+                rng.random_range(-0.3..0.3),
+                1.0,
+            )
+            .normalize();
+            let tilt = Vector::new(
+                rng.random_range(-0.06..0.06),
+                rng.random_range(-0.06..0.06),
+                rng.random_range(-0.06..0.06),
+            );
+            Sample {
+                point: Point::from(dir),
+                normal: (dir + tilt).normalize(),
+            }
+        })
+        .collect()
+}
+
+#[test]
+fn closed_form_matches_hyper_dual_witness() {
+    let mut rng = ChaCha8Rng::seed_from_u64(SEED);
+    let mut scratch = FieldScratch::default();
+    let mut worst = [0.0f64; 6];
+    for case in 0..50 {
+        let samples = cloud(&mut rng, 60);
+        let h = rng.random_range(0.05..0.3);
+        let a = 1.0 / (h * h);
+        let x = Point::new(
+            rng.random_range(-0.1..0.1),
+            rng.random_range(-0.1..0.1),
+            1.0 + rng.random_range(-0.5..0.5) * h,
+        );
+        let closed = evaluate(&x, &samples, a, &mut scratch).expect("defined");
+        let w = mls_ad::witness(&x.coords, &samples, a);
+        let gscale = w.gradient.norm();
+        let hscale = w.hessian.norm();
+        let n2scale: f64 = w.second.iter().map(|m| m.norm()).sum();
+        let errs = [
+            rel(closed.value, w.value, gscale * h),
+            (closed.gradient - w.gradient).norm() / gscale,
+            (closed.hessian - w.hessian).norm() / hscale,
+            (closed.field.normal - w.normal).norm(),
+            (closed.field.jacobian - w.jacobian).norm() / w.jacobian.norm().max(1.0 / h),
+            (0..3)
+                .map(|c| (closed.field.second[c] - w.second[c]).norm())
+                .sum::<f64>()
+                / n2scale.max(1.0 / (h * h)),
+        ];
+        for (k, e) in errs.iter().enumerate() {
+            worst[k] = worst[k].max(*e);
+            assert!(
+                *e < 1e-10,
+                "case {case} (seed {SEED:#x}) quantity {k}: relative difference {e:e}"
+            );
+        }
+        assert!(closed.log_scale == w.log_scale);
+        let eq5 = mls_ad::implicit_from_energy(&x.coords, &samples, a, w.log_scale);
+        assert!(
+            rel(eq5, w.value, gscale * h) < 1e-12,
+            "Eq. 5 and Eq. 7 disagree: {eq5} vs {}",
+            w.value
+        );
+    }
+    eprintln!("worst relative differences g, grad, H, n, J, d2n: {worst:?}");
+}

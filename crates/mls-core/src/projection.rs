@@ -1,0 +1,132 @@
+//! The Amenta–Kil projection (Sec. 3, Fig. 2): from `x_j`, find the nearest local minimum of
+//! the energy (Eq. 4) along the line `x_j + t n(x_j)`, move there, repeat.
+//!
+//! Along the line, with `b_i = (x_j − q_i)·n`, `c_i = |x_j − q_i|²`, `B = b_i + t` and
+//! `θ_i(t) = exp(−a(c_i + 2 t b_i + t²))`:
+//! $$ e'(t) = \sum_i 2\theta_i (B - aB^3),\qquad e''(t) = \sum_i \theta_i (2 - 10aB^2 + 4a^2B^4). $$
+//! `e'(0) = g(x_j)` (Eq. 5 = Eq. 7), so g = 0 also at energy *maxima*, the spurious sheets
+//! about ±h off the surface. The search walks downhill and brackets a sign change of e' from
+//! negative to positive (in the walking direction), so it only ever stops where `e'' ≥ 0`.
+
+/// Stopping rules of the projection.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ProjectionConfig {
+    /// Stop when a step is shorter than `tolerance · h`.
+    pub tolerance: f64,
+    /// Give up (status `ProjectionFailed`) after this many line searches.
+    pub max_iterations: usize,
+    /// The farthest a single line search may walk, in units of h. Beyond about h from the
+    /// surface the energy decreases away from it (it tends to 0 at infinity), so a point that
+    /// far finds no minimum and is reported, not dragged onto a spurious sheet.
+    pub max_travel: f64,
+}
+
+impl Default for ProjectionConfig {
+    fn default() -> Self {
+        Self {
+            tolerance: 1e-10,
+            max_iterations: 100,
+            max_travel: 1.5,
+        }
+    }
+}
+
+/// One sample seen from the line: `b = (x − q)·n` and `c = |x − q|²`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct LineSample {
+    pub b: f64,
+    pub c: f64,
+}
+
+/// `(e'(t), e''(t))`, both scaled by the same positive constant `exp(a·shift)`.
+fn energy_derivatives(line: &[LineSample], a: f64, shift: f64, t: f64) -> (f64, f64) {
+    let mut e1 = 0.0;
+    let mut e2 = 0.0;
+    for s in line {
+        let theta = (-a * (s.c + 2.0 * t * s.b + t * t - shift)).exp();
+        let bb = s.b + t;
+        let ab2 = a * bb * bb;
+        e1 += 2.0 * theta * bb * (1.0 - ab2);
+        e2 += theta * (2.0 - 10.0 * ab2 + 4.0 * ab2 * ab2);
+    }
+    (e1, e2)
+}
+
+/// The local minimum of `e(t)` reached by walking downhill from `t = 0`, or `None` when there
+/// is none within `max_travel`.
+pub(crate) fn line_minimum(
+    line: &[LineSample],
+    a: f64,
+    h: f64,
+    cfg: &ProjectionConfig,
+) -> Option<f64> {
+    let shift = line.iter().map(|s| s.c).fold(f64::INFINITY, f64::min);
+    let f = |t: f64| energy_derivatives(line, a, shift, t);
+    let tol = cfg.tolerance * h;
+    let max_step = 0.25 * h;
+    let (mut e1, mut e2) = f(0.0);
+    if !(e1.is_finite() && e2.is_finite()) {
+        return None;
+    }
+    if e1 == 0.0 && e2 > 0.0 {
+        return Some(0.0);
+    }
+    // Downhill; at an exact stationary point that is not a minimum, head towards the samples.
+    let dir = if e1 != 0.0 {
+        -e1.signum()
+    } else {
+        let toward: f64 = line.iter().map(|s| -s.b).sum();
+        if toward < 0.0 { -1.0 } else { 1.0 }
+    };
+    // March until e' changes sign (a minimum is bracketed) or Newton converges on the way.
+    let mut t = 0.0;
+    let (lo, hi) = loop {
+        let newton = if e2 > 0.0 { -e1 / e2 } else { f64::NAN };
+        let step = if newton * dir > 0.0 {
+            newton.abs().min(max_step)
+        } else {
+            max_step
+        };
+        let t_new = t + dir * step;
+        if t_new.abs() > cfg.max_travel * h {
+            return None;
+        }
+        let (n1, n2) = f(t_new);
+        if !(n1.is_finite() && n2.is_finite()) {
+            return None;
+        }
+        if n1 == 0.0 || n1.signum() == dir {
+            break (t, t_new);
+        }
+        if step < tol && n2 > 0.0 {
+            return Some(t_new);
+        }
+        (t, e1, e2) = (t_new, n1, n2);
+    };
+    // Safeguarded Newton inside the bracket: e'·dir < 0 at `lo`, ≥ 0 at `hi`.
+    let (mut lo, mut hi) = (lo, hi);
+    let mut t = hi;
+    for _ in 0..200 {
+        let (n1, n2) = f(t);
+        if n1 == 0.0 {
+            return Some(t);
+        }
+        if n1.signum() == dir {
+            hi = t;
+        } else {
+            lo = t;
+        }
+        let newton = t - n1 / n2;
+        let inside = (newton - lo) * (newton - hi) < 0.0;
+        let next = if n2 > 0.0 && inside {
+            newton
+        } else {
+            0.5 * (lo + hi)
+        };
+        if (next - t).abs() < tol || (hi - lo).abs() < tol {
+            return Some(next);
+        }
+        t = next;
+    }
+    Some(0.5 * (lo + hi))
+}

@@ -1,0 +1,350 @@
+//! The whole-cloud MLS surface: built once from points, oriented normals, h and cutoff, then
+//! evaluated at many query points, sequentially or in parallel.
+
+use kiddo::{ImmutableKdTree, SquaredEuclidean};
+use rayon::prelude::*;
+
+use crate::curvature::{Curvature, curvature};
+use crate::error::ConfigError;
+use crate::field::{FieldScratch, Implicit, Sample, evaluate};
+use crate::kernel::{Cutoff, Kernel};
+use crate::math::{Point, UnitNormal, Vector};
+use crate::projection::{LineSample, ProjectionConfig, line_minimum};
+use crate::status::PointStatus;
+
+/// Who runs the per-point loop. The caller decides (for example a `--threads` option sets up
+/// a rayon pool and installs it around the call).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Parallelism {
+    /// One thread, in order.
+    Sequential,
+    /// rayon's current thread pool.
+    #[default]
+    Rayon,
+}
+
+/// Parameters of the MLS surface.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MlsConfig {
+    /// Gaussian scale h (Eq. 3), in the units of the points.
+    pub h: f64,
+    /// Kernel truncation.
+    pub cutoff: Cutoff,
+    /// Fewer samples than this within the support give status `TooFewNeighbours`.
+    pub min_neighbours: usize,
+    /// Stopping rules of the projection.
+    pub projection: ProjectionConfig,
+}
+
+impl MlsConfig {
+    /// Defaults for scale `h`: cutoff 5h, at least 3 neighbours, default projection.
+    pub fn new(h: f64) -> Self {
+        Self {
+            h,
+            cutoff: Cutoff::DEFAULT,
+            min_neighbours: 3,
+            projection: ProjectionConfig::default(),
+        }
+    }
+}
+
+/// Curvature at a point of the MLS surface, with the implicit-function data behind it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SurfacePoint {
+    /// Where the curvature was evaluated (the query point, or the projected point).
+    pub point: Point,
+    /// Principal curvatures, directions, mean and Gaussian curvature.
+    pub curvature: Curvature,
+    /// g, ∇g, H and the normal field there.
+    pub implicit: Implicit,
+}
+
+/// Outcome for one query point.
+pub type PointResult = Result<SurfacePoint, PointStatus>;
+
+/// The MLS surface of an oriented point cloud.
+#[derive(Debug)]
+pub struct MlsSurface {
+    /// Points are stored relative to `origin` (their bounding-box centre) so that coordinates
+    /// far from zero (georeferenced scans) do not cost precision in `x − q`.
+    origin: Vector,
+    samples: Vec<Sample>,
+    tree: ImmutableKdTree<f64, 3>,
+    kernel: Kernel,
+    config: MlsConfig,
+}
+
+impl MlsSurface {
+    /// Builds the surface. Normals must be non-zero and consistently oriented; they are
+    /// normalised here.
+    pub fn new(
+        points: &[Point],
+        normals: &[Vector],
+        config: MlsConfig,
+    ) -> Result<Self, ConfigError> {
+        let kernel = Kernel::new(config.h, config.cutoff)?;
+        if points.len() != normals.len() {
+            return Err(ConfigError::LengthMismatch {
+                points: points.len(),
+                normals: normals.len(),
+            });
+        }
+        if points.len() > u32::MAX as usize {
+            return Err(ConfigError::TooManyPoints(points.len()));
+        }
+        if let Some(index) = points.iter().position(|p| !p.iter().all(|c| c.is_finite())) {
+            return Err(ConfigError::NonFinitePoint { index });
+        }
+        let origin = bounding_box_centre(points);
+        let samples = points
+            .iter()
+            .zip(normals)
+            .enumerate()
+            .map(|(index, (p, n))| {
+                let normal = UnitNormal::new(*n)
+                    .map_err(|source| ConfigError::BadNormal { index, source })?;
+                Ok(Sample {
+                    point: p - origin,
+                    normal: normal.into_inner(),
+                })
+            })
+            .collect::<Result<Vec<_>, ConfigError>>()?;
+        let coords: Vec<[f64; 3]> = samples.iter().map(|s| s.point.coords.into()).collect();
+        let tree = ImmutableKdTree::new_from_slice(&coords)
+            .map_err(|_| ConfigError::TooManyPoints(points.len()))?;
+        Ok(Self {
+            origin,
+            samples,
+            tree,
+            kernel,
+            config,
+        })
+    }
+
+    /// The configuration the surface was built with.
+    pub fn config(&self) -> &MlsConfig {
+        &self.config
+    }
+
+    /// The kernel (h and cutoff).
+    pub fn kernel(&self) -> &Kernel {
+        &self.kernel
+    }
+
+    /// Number of samples.
+    pub fn len(&self) -> usize {
+        self.samples.len()
+    }
+
+    /// Whether the cloud is empty.
+    pub fn is_empty(&self) -> bool {
+        self.samples.is_empty()
+    }
+
+    /// A per-thread evaluator holding reusable buffers.
+    pub fn evaluator(&self) -> Evaluator<'_> {
+        Evaluator {
+            surface: self,
+            support: Vec::new(),
+            scratch: FieldScratch::default(),
+            line: Vec::new(),
+        }
+    }
+
+    /// Curvature at each query point (the level set of g through it), in query order.
+    pub fn curvature_at_points(&self, queries: &[Point], par: Parallelism) -> Vec<PointResult> {
+        self.map_queries(queries, par, |ev, q| ev.curvature_at(q))
+    }
+
+    /// Projects each query point onto the MLS surface and evaluates curvature there.
+    pub fn project_points(&self, queries: &[Point], par: Parallelism) -> Vec<PointResult> {
+        self.map_queries(queries, par, |ev, q| ev.project(q))
+    }
+
+    fn map_queries<F>(&self, queries: &[Point], par: Parallelism, f: F) -> Vec<PointResult>
+    where
+        F: Fn(&mut Evaluator<'_>, &Point) -> PointResult + Sync,
+    {
+        match par {
+            Parallelism::Sequential => {
+                let mut ev = self.evaluator();
+                queries.iter().map(|q| f(&mut ev, q)).collect()
+            }
+            // Chunks of a few hundred points amortise the evaluator set-up and keep each
+            // thread's buffers warm.
+            Parallelism::Rayon => queries
+                .par_iter()
+                .with_min_len(256)
+                .map_init(|| self.evaluator(), |ev, q| f(ev, q))
+                .collect(),
+        }
+    }
+}
+
+fn bounding_box_centre(points: &[Point]) -> Vector {
+    let Some(first) = points.first() else {
+        return Vector::zeros();
+    };
+    let (lo, hi) = points
+        .iter()
+        .fold((first.coords, first.coords), |(lo, hi), p| {
+            (lo.inf(&p.coords), hi.sup(&p.coords))
+        });
+    (lo + hi) * 0.5
+}
+
+/// Evaluates the surface at query points without allocating per query (after warm-up).
+#[derive(Debug)]
+pub struct Evaluator<'a> {
+    surface: &'a MlsSurface,
+    support: Vec<Sample>,
+    scratch: FieldScratch,
+    line: Vec<LineSample>,
+}
+
+impl Evaluator<'_> {
+    /// Collects into the internal buffer the samples within `radius` of `x` (all samples when
+    /// `radius` is `None`); `x` is in the surface's internal frame.
+    fn gather(&mut self, x: &Point, radius: Option<f64>) {
+        self.support.clear();
+        let s = self.surface;
+        match radius {
+            Some(r) => {
+                let support = &mut self.support;
+                s.tree
+                    .query(&x.coords.into())
+                    .within::<SquaredEuclidean<f64>>(r * r)
+                    .unsorted()
+                    .visit(|hit| support.push(s.samples[hit.item as usize]));
+            }
+            None => self.support.extend_from_slice(&s.samples),
+        }
+    }
+
+    /// The samples within the kernel support of the world-space point `x`, in world space. For
+    /// independent re-computation (the AD witness) of what this evaluator computes.
+    pub fn support_of(&mut self, x: &Point) -> Vec<Sample> {
+        let local = x - self.surface.origin;
+        self.gather(&local, self.surface.kernel.support_radius());
+        self.support
+            .iter()
+            .map(|s| Sample {
+                point: s.point + self.surface.origin,
+                normal: s.normal,
+            })
+            .collect()
+    }
+
+    /// g, ∇g and H at the world-space point `x`.
+    pub fn implicit_at(&mut self, x: &Point) -> Result<Implicit, PointStatus> {
+        if !x.iter().all(|c| c.is_finite()) {
+            return Err(PointStatus::InvalidQuery);
+        }
+        let local = x - self.surface.origin;
+        self.gather(&local, self.surface.kernel.support_radius());
+        self.implicit_at_local(&local)
+    }
+
+    fn implicit_at_local(&mut self, local: &Point) -> Result<Implicit, PointStatus> {
+        if self.support.is_empty() {
+            return Err(PointStatus::NoNeighbours);
+        }
+        if self.support.len() < self.surface.config.min_neighbours {
+            return Err(PointStatus::TooFewNeighbours);
+        }
+        evaluate(
+            local,
+            &self.support,
+            self.surface.kernel.inv_h2(),
+            &mut self.scratch,
+        )
+    }
+
+    /// Curvature of the level set of g through the world-space point `x`.
+    pub fn curvature_at(&mut self, x: &Point) -> PointResult {
+        let implicit = self.implicit_at(x)?;
+        let curvature = curvature(&implicit.gradient, &implicit.hessian)
+            .ok_or(PointStatus::GradientVanishes)?;
+        Ok(SurfacePoint {
+            point: *x,
+            curvature,
+            implicit,
+        })
+    }
+
+    /// Projects the world-space point `x` onto the MLS surface (Amenta–Kil) and evaluates the
+    /// curvature there.
+    pub fn project(&mut self, x: &Point) -> PointResult {
+        if !x.iter().all(|c| c.is_finite()) {
+            return Err(PointStatus::InvalidQuery);
+        }
+        let s = self.surface;
+        let cfg = s.config.projection;
+        let h = s.kernel.h();
+        let a = s.kernel.inv_h2();
+        // The line search may walk `max_travel · h`; gathering that much farther keeps every
+        // sample that can enter the support along the way, so e(t) is smooth in t.
+        let radius = s.kernel.support_radius().map(|r| r + cfg.max_travel * h);
+        let mut local = x - s.origin;
+        let mut converged = false;
+        for _ in 0..cfg.max_iterations {
+            self.gather(&local, radius);
+            if self.support.len() < s.config.min_neighbours.max(1) {
+                return Err(if self.support.is_empty() {
+                    PointStatus::NoNeighbours
+                } else {
+                    PointStatus::TooFewNeighbours
+                });
+            }
+            let n = self.weighted_normal(&local)?;
+            self.line.clear();
+            self.line.extend(self.support.iter().map(|q| {
+                let d = local - q.point;
+                LineSample {
+                    b: d.dot(&n),
+                    c: d.norm_squared(),
+                }
+            }));
+            let t = line_minimum(&self.line, a, h, &cfg).ok_or(PointStatus::ProjectionFailed)?;
+            local += n * t;
+            if t.abs() < cfg.tolerance * h {
+                converged = true;
+                break;
+            }
+        }
+        if !converged {
+            return Err(PointStatus::ProjectionFailed);
+        }
+        self.gather(&local, s.kernel.support_radius());
+        let implicit = self.implicit_at_local(&local)?;
+        let curvature = curvature(&implicit.gradient, &implicit.hessian)
+            .ok_or(PointStatus::GradientVanishes)?;
+        Ok(SurfacePoint {
+            point: local + s.origin,
+            curvature,
+            implicit,
+        })
+    }
+
+    /// n(x) alone (Eq. 2) from the gathered support, without derivatives.
+    fn weighted_normal(&self, x: &Point) -> Result<Vector, PointStatus> {
+        let a = self.surface.kernel.inv_h2();
+        let shift = self
+            .support
+            .iter()
+            .map(|s| (x - s.point).norm_squared())
+            .fold(f64::INFINITY, f64::min);
+        let (m, wsum) = self
+            .support
+            .iter()
+            .fold((Vector::zeros(), 0.0), |(m, wsum), s| {
+                let w = (-a * ((x - s.point).norm_squared() - shift)).exp();
+                (m + s.normal * w, wsum + w)
+            });
+        let r = m.norm();
+        if !(r >= crate::field::MIN_NORMAL_COHERENCE * wsum) {
+            return Err(PointStatus::NormalUndefined);
+        }
+        Ok(m / r)
+    }
+}
