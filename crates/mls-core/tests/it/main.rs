@@ -1,0 +1,6 @@
+//! mls-core integration tests: invariances, exact shapes, projection, whole-cloud evaluation.
+
+mod clouds;
+mod invariance;
+mod projection;
+mod surface;
