@@ -1,1 +1,75 @@
-fn main() {}
+//! Project tasks: `cargo xtask <task>`. Run without a task for the list.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use anyhow::{Context, Result, bail};
+
+mod faults;
+mod validate;
+mod validate_shapes;
+
+const TASKS: &str = "\
+Tasks:
+  validate [--quick] [--seed N] [--evals N] [--differential-only]
+                 Closed form against hyper-dual AD on seeded random clouds, and analytic shapes.
+                 Writes target/validate/report.md. --quick: a small run for CI.
+  faults         Applies each known misreading of the paper to a copy of mls-core and checks
+                 that `validate --quick` catches it. Writes target/validate/faults.md.
+  ci             fmt --check, clippy -D warnings, tests, validate --quick.";
+
+fn main() -> Result<()> {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    std::env::set_current_dir(project_root()).context("cannot change to the project root")?;
+    let Some(task) = args.first() else {
+        println!("{TASKS}");
+        return Ok(());
+    };
+    let rest = &args[1..];
+    match task.as_str() {
+        "validate" => validate::run(&validate::Options::parse(rest)?),
+        "faults" => faults::run(),
+        "ci" => ci(),
+        other => bail!("unknown task `{other}`\n{TASKS}"),
+    }
+}
+
+/// The workspace root: the xtask manifest's parent.
+fn project_root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .parent()
+        .map(Path::to_path_buf)
+        .unwrap_or_else(|| PathBuf::from("."))
+}
+
+/// The cargo that invoked us, so toolchain overrides carry through.
+pub(crate) fn cargo() -> Command {
+    Command::new(std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into()))
+}
+
+pub(crate) fn run_checked(cmd: &mut Command) -> Result<()> {
+    let status = cmd
+        .status()
+        .with_context(|| format!("cannot run {cmd:?}"))?;
+    if !status.success() {
+        bail!("{cmd:?} failed with {status}");
+    }
+    Ok(())
+}
+
+fn ci() -> Result<()> {
+    run_checked(cargo().args(["fmt", "--all", "--", "--check"]))?;
+    run_checked(cargo().args([
+        "clippy",
+        "--workspace",
+        "--all-targets",
+        "--",
+        "-D",
+        "warnings",
+    ]))?;
+    run_checked(cargo().args(["test", "--workspace"]))?;
+    validate::run(&validate::Options {
+        quick: true,
+        ..validate::Options::default()
+    })
+}
