@@ -19,6 +19,7 @@ pub mod error;
 pub mod field;
 pub mod kernel;
 pub mod math;
+pub mod normals;
 pub mod projection;
 pub mod status;
 pub mod surface;
@@ -28,6 +29,10 @@ pub use error::ConfigError;
 pub use field::{Implicit, NormalField, Sample};
 pub use kernel::{Cutoff, Kernel};
 pub use math::{Matrix, Point, UnitNormal, Vector};
+pub use normals::{
+    EstimatedNormals, NormalsConfig, NormalsError, Orientation, estimate_normals,
+    orientation_consistency,
+};
 pub use projection::ProjectionConfig;
 pub use status::PointStatus;
 pub use surface::{Evaluator, MlsConfig, MlsSurface, Parallelism, PointResult, SurfacePoint};

@@ -1,1 +1,232 @@
-//! placeholder, replaced below
+//! Point-cloud readers and writers for mls-curvature: PLY (ASCII and binary, either byte
+//! order), whitespace-separated XYZ/TXT/PTS, and CSV with a header.
+//!
+//! Readers return a [`PointCloud`] of points and, when the file has all of `nx`, `ny`, `nz`,
+//! normals exactly as stored (not normalised: the caller validates them). Every coordinate and
+//! normal component must be finite. Errors ([`ReadError`]) are one line starting with the file
+//! name and say where: the line and field for text, the byte offset and property for binary
+//! PLY. An empty cloud is not an error; the caller decides.
+//!
+//! Writers take a table of named [`Column`]s (floats as `f64`, integers such as a status code
+//! as `i32`) and write it atomically as PLY, CSV or XYZ; floats round-trip exactly in every
+//! format.
+//!
+//! ```
+//! use mls_io::{PlyFormat, PointCloud, read_ply, write_ply_to};
+//!
+//! let cloud = PointCloud { points: vec![[0.0, 1.0, 2.5]], normals: Some(vec![[0.0, 0.0, 1.0]]) };
+//! let mut bytes = Vec::new();
+//! write_ply_to(&mut bytes, "memory", &cloud.columns(), PlyFormat::BinaryLittleEndian)?;
+//! assert_eq!(read_ply(&bytes[..], "memory")?, cloud);
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+//!
+//! Architecture invariant: this crate does no geometry; it only moves numbers between files
+//! and memory.
+
+#![warn(missing_docs)]
+
+mod error;
+mod lines;
+mod ply;
+mod text;
+mod write;
+
+use std::fs::File;
+use std::io::{BufRead, BufReader};
+use std::path::{Path, PathBuf};
+
+pub use error::{ReadError, WriteError};
+pub use text::{read_csv, read_xyz};
+pub use write::{
+    Axis, Column, ColumnData, PlyFormat, write_csv, write_csv_to, write_ply, write_ply_to,
+    write_point_cloud, write_xyz, write_xyz_to,
+};
+
+/// The fields the readers look for, in the order of the slots of a row.
+const SLOT_NAMES: [&str; 6] = ["x", "y", "z", "nx", "ny", "nz"];
+
+/// The most points a reader reserves room for before reading them. A header may claim any
+/// count; memory beyond this grows only as points actually arrive.
+const MAX_PREALLOCATED: u64 = 1 << 20;
+
+/// Points, and normals if the file has them.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct PointCloud {
+    /// The points, in file order.
+    pub points: Vec<[f64; 3]>,
+    /// One normal per point, as stored in the file (not normalised, possibly zero), if the
+    /// file has `nx`, `ny` and `nz`.
+    pub normals: Option<Vec<[f64; 3]>>,
+}
+
+impl PointCloud {
+    /// The number of points.
+    pub fn len(&self) -> usize {
+        self.points.len()
+    }
+
+    /// Whether there are no points.
+    pub fn is_empty(&self) -> bool {
+        self.points.is_empty()
+    }
+
+    /// Columns `x y z`, and `nx ny nz` if there are normals, borrowing the data, for the
+    /// writers.
+    pub fn columns(&self) -> Vec<Column<'_>> {
+        let mut columns = vec![
+            Column::component("x", &self.points, Axis::X),
+            Column::component("y", &self.points, Axis::Y),
+            Column::component("z", &self.points, Axis::Z),
+        ];
+        if let Some(normals) = &self.normals {
+            columns.extend([
+                Column::component("nx", normals, Axis::X),
+                Column::component("ny", normals, Axis::Y),
+                Column::component("nz", normals, Axis::Z),
+            ]);
+        }
+        columns
+    }
+}
+
+/// A file format, as named by a file extension.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FileFormat {
+    /// `.ply`: PLY, ASCII or binary.
+    Ply,
+    /// `.xyz`, `.txt`, `.pts`: whitespace-separated columns without a header.
+    Xyz,
+    /// `.csv`: comma-separated columns with a header row.
+    Csv,
+}
+
+impl FileFormat {
+    /// The format for an extension (without the dot, case-insensitive), if supported.
+    pub fn from_extension(extension: &str) -> Option<Self> {
+        match extension.to_ascii_lowercase().as_str() {
+            "ply" => Some(Self::Ply),
+            "xyz" | "txt" | "pts" => Some(Self::Xyz),
+            "csv" => Some(Self::Csv),
+            _ => None,
+        }
+    }
+
+    /// The format for a path's extension, if it has a supported one.
+    pub fn from_path(path: &Path) -> Option<Self> {
+        detect_format(path).ok()
+    }
+}
+
+/// The format for a path, or the unsupported extension (`None` if there is none).
+fn detect_format(path: &Path) -> Result<FileFormat, Option<String>> {
+    let extension = path.extension().ok_or(None)?.to_string_lossy();
+    FileFormat::from_extension(&extension).ok_or_else(|| Some(extension.into_owned()))
+}
+
+/// Reads a point cloud, choosing the reader by the file's extension (case-insensitive):
+/// `.ply` ([`read_ply`]), `.xyz`, `.txt`, `.pts` ([`read_xyz`]) or `.csv` ([`read_csv`]).
+///
+/// # Errors
+/// [`ReadError::NoExtension`] or [`ReadError::UnknownExtension`] before the file is opened,
+/// [`ReadError::Io`] if it cannot be opened or read, and those of the reader.
+pub fn read_point_cloud(path: &Path) -> Result<PointCloud, ReadError> {
+    let file = path.display().to_string();
+    let format = match detect_format(path) {
+        Ok(format) => format,
+        Err(None) => return Err(ReadError::NoExtension { file }),
+        Err(Some(extension)) => return Err(ReadError::UnknownExtension { file, extension }),
+    };
+    let opened = File::open(path).map_err(|source| ReadError::Io {
+        file: file.clone(),
+        source,
+    })?;
+    let size = opened.metadata().ok().map(|m| m.len());
+    let reader = BufReader::with_capacity(1 << 20, opened);
+    match format {
+        FileFormat::Ply => ply::read(reader, &file, size),
+        FileFormat::Xyz => read_xyz(reader, &file),
+        FileFormat::Csv => read_csv(reader, &file),
+    }
+}
+
+/// Reads a PLY file (`ascii`, `binary_little_endian` or `binary_big_endian`) from a stream;
+/// `name` is the display name used in errors.
+///
+/// The `vertex` element must have scalar properties `x`, `y`, `z` and may have `nx`, `ny`,
+/// `nz` (all three or none), of any PLY scalar type (`char`/`int8` … `double`/`float64`).
+/// Other vertex properties, including lists, and other elements before the vertex element
+/// are skipped; elements after it are not read at all. Comments and `obj_info` lines are
+/// ignored. In an ASCII body each element instance is one line; blank lines are ignored.
+///
+/// # Errors
+/// [`ReadError::Header`] (naming the header line), [`ReadError::MissingField`],
+/// [`ReadError::PartialNormals`]; for an ASCII body [`ReadError::Ascii`] (naming the line
+/// and the property); for a binary body [`ReadError::Truncated`] and [`ReadError::Binary`]
+/// (naming the byte offset, element index and property); and [`ReadError::Io`].
+pub fn read_ply(reader: impl BufRead, name: &str) -> Result<PointCloud, ReadError> {
+    ply::read(reader, name, None)
+}
+
+/// Returns whether `a` and `b` name the same file, so a caller can refuse to overwrite its
+/// input. Paths that exist are compared by identity (device and inode on Unix, canonical path
+/// elsewhere), so links and `..` are seen through; a path that does not exist yet is compared
+/// by its canonical directory and file name, and failing that, literally.
+pub fn same_file(a: &Path, b: &Path) -> bool {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::MetadataExt;
+        if let (Ok(ma), Ok(mb)) = (a.metadata(), b.metadata()) {
+            return ma.dev() == mb.dev() && ma.ino() == mb.ino();
+        }
+    }
+    match (canonical(a), canonical(b)) {
+        (Some(ca), Some(cb)) => ca == cb,
+        _ => a == b,
+    }
+}
+
+/// The canonical form of a path, or of its directory joined with its file name when the file
+/// does not exist.
+fn canonical(path: &Path) -> Option<PathBuf> {
+    if let Ok(path) = path.canonicalize() {
+        return Some(path);
+    }
+    let name = path.file_name()?;
+    let dir = match path.parent() {
+        Some(parent) if !parent.as_os_str().is_empty() => parent,
+        _ => Path::new("."),
+    };
+    Some(dir.canonicalize().ok()?.join(name))
+}
+
+/// Collects the values the readers find, row by row, into a [`PointCloud`].
+#[derive(Debug)]
+struct CloudBuilder {
+    points: Vec<[f64; 3]>,
+    normals: Option<Vec<[f64; 3]>>,
+}
+
+impl CloudBuilder {
+    fn new(has_normals: bool, capacity: usize) -> Self {
+        Self {
+            points: Vec::with_capacity(capacity),
+            normals: has_normals.then(|| Vec::with_capacity(capacity)),
+        }
+    }
+
+    /// Adds one row of values in the order of [`SLOT_NAMES`].
+    fn push(&mut self, [x, y, z, nx, ny, nz]: [f64; 6]) {
+        self.points.push([x, y, z]);
+        if let Some(normals) = &mut self.normals {
+            normals.push([nx, ny, nz]);
+        }
+    }
+
+    fn finish(self) -> PointCloud {
+        PointCloud {
+            points: self.points,
+            normals: self.normals,
+        }
+    }
+}

@@ -1,0 +1,321 @@
+//! The subcommands.
+
+use anyhow::{Context, Result};
+use mls_core::normals::{DEFAULT_NEIGHBOURS, NeighbourGraph, orientation_consistency};
+use mls_core::{MlsConfig, MlsSurface, Parallelism, Point, PointResult, PointStatus, Vector};
+use mls_io::{Axis, Column, PlyFormat};
+
+use crate::pipeline::{self, Timings};
+use crate::{At, CurvatureArgs, EvalArgs, InfoArgs, NormalsArgs, ProjectArgs, interactive, status_code};
+
+const NAN3: [f64; 3] = [f64::NAN; 3];
+
+fn ply_format(ascii: bool) -> PlyFormat {
+    if ascii { PlyFormat::Ascii } else { PlyFormat::BinaryLittleEndian }
+}
+
+/// Vector columns `px py pz` for a prefix `p` (`"n"` gives `nx ny nz`).
+fn vector_columns<'a>(names: [&'a str; 3], v: &'a [[f64; 3]]) -> [Column<'a>; 3] {
+    [
+        Column::component(names[0], v, Axis::X),
+        Column::component(names[1], v, Axis::Y),
+        Column::component(names[2], v, Axis::Z),
+    ]
+}
+
+pub fn curvature(a: CurvatureArgs) -> Result<()> {
+    pipeline::check_output(&a.input, &a.out.output)?;
+    let s = &a.surface;
+    pipeline::with_threads(s.threads, || {
+        let mut t = Timings::default();
+        let par = Parallelism::Rayon;
+        let cloud = t.time("read", || pipeline::read(&a.input))?;
+        let points = pipeline::to_points(&cloud);
+        let scale = t.time("spacing", || pipeline::choose_h(&points, s.h, s.h_factor, par, &a.input))?;
+        let normals = t.time("normals", || pipeline::normals(&cloud, &points, s.normals, s.orient, scale.h, par, &a.input))?;
+        let surface = t.time("index", || pipeline::surface(&points, &normals.normals, scale.h, s.cutoff, &a.input))?;
+        let label = match a.at {
+            At::Input => "curvature",
+            At::Projected => "projection",
+        };
+        let results: Vec<PointResult> = t.time(label, || {
+            crate::progress::chunked(points.len(), label, interactive(s.quiet), |range| match a.at {
+                At::Input => surface.curvature_at_points(&points[range], par),
+                At::Projected => surface.project_points(&points[range], par),
+            })
+        });
+        let n = results.len();
+        let mut pos = Vec::with_capacity(n);
+        let mut nrm = Vec::with_capacity(n);
+        let (mut k1, mut k2, mut mean, mut gauss) =
+            (Vec::with_capacity(n), Vec::with_capacity(n), Vec::with_capacity(n), Vec::with_capacity(n));
+        let (mut d1, mut d2, mut status) = (Vec::with_capacity(n), Vec::with_capacity(n), Vec::with_capacity(n));
+        for (r, p) in results.iter().zip(&cloud.points) {
+            status.push(status_code(r));
+            match r {
+                Ok(sp) => {
+                    let c = &sp.curvature;
+                    pos.push(sp.point.coords.into());
+                    nrm.push(c.normal.into());
+                    k1.push(c.k1);
+                    k2.push(c.k2);
+                    mean.push(c.mean);
+                    gauss.push(c.gauss);
+                    d1.push(c.d1.into());
+                    d2.push(c.d2.into());
+                }
+                Err(_) => {
+                    pos.push(*p);
+                    for v in [&mut nrm, &mut d1, &mut d2] {
+                        v.push(NAN3);
+                    }
+                    for v in [&mut k1, &mut k2, &mut mean, &mut gauss] {
+                        v.push(f64::NAN);
+                    }
+                }
+            }
+        }
+        let mut columns = Vec::with_capacity(17);
+        columns.extend(vector_columns(["x", "y", "z"], &pos));
+        columns.extend(vector_columns(["nx", "ny", "nz"], &nrm));
+        columns.extend([
+            Column::f64("k1", &k1),
+            Column::f64("k2", &k2),
+            Column::f64("mean", &mean),
+            Column::f64("gauss", &gauss),
+        ]);
+        columns.extend(vector_columns(["d1x", "d1y", "d1z"], &d1));
+        columns.extend(vector_columns(["d2x", "d2y", "d2z"], &d2));
+        columns.push(Column::i32("status", &status));
+        t.time("write", || mls_io::write_point_cloud(&a.out.output, &columns, ply_format(a.out.ascii)))?;
+        if !s.quiet {
+            eprintln!("mlscurv curvature: {}", a.input.display());
+            eprintln!("  points read     {}", points.len());
+            eprintln!("  h               {:.6} = {}", scale.h, scale.why);
+            eprintln!("  cutoff          {}", cutoff_text(s.cutoff));
+            eprintln!("  normals         {}", normals.source);
+            eprintln!("  evaluated at    {}", if a.at == At::Input { "input points" } else { "projected points" });
+            eprintln!("  status          {}", pipeline::status_counts(&status));
+            eprintln!("  k1              {}", pipeline::percentiles(&k1));
+            eprintln!("  k2              {}", pipeline::percentiles(&k2));
+            eprintln!("  mean            {}", pipeline::percentiles(&mean));
+            eprintln!("  gauss           {}", pipeline::percentiles(&gauss));
+            print_timings(&t, points.len());
+            eprintln!("  wrote           {}", a.out.output.display());
+        }
+        Ok(())
+    })
+}
+
+fn cutoff_text(c: mls_core::Cutoff) -> String {
+    match c {
+        mls_core::Cutoff::Radius(r) => format!("{r} h"),
+        mls_core::Cutoff::None => "none (untruncated kernel)".into(),
+    }
+}
+
+fn print_timings(t: &Timings, n: usize) {
+    let total: f64 = t.0.iter().map(|(_, s)| s).sum();
+    let stages: Vec<String> = t.0.iter().map(|(name, s)| format!("{name} {s:.3}")).collect();
+    eprintln!("  time (s)        {}; total {total:.3} ({:.0} points/s)", stages.join(", "), n as f64 / total.max(1e-9));
+}
+
+pub fn eval(a: EvalArgs) -> Result<()> {
+    let cloud = pipeline::read(&a.cloud)?;
+    let Some(file_normals) = &cloud.normals else {
+        anyhow::bail!("{}: the cloud has no normals (nx, ny, nz); eval needs an oriented cloud", a.cloud.display());
+    };
+    let queries = mls_io::read_point_cloud(&a.queries)?;
+    let points = pipeline::to_points(&cloud);
+    let par = Parallelism::Rayon;
+    let h = match a.h {
+        Some(h) => h,
+        None => pipeline::choose_h(&points, None, mls_core::normals::DEFAULT_H_FACTOR, par, &a.cloud)?.h,
+    };
+    let normals: Vec<Vector> = file_normals.iter().map(|n| Vector::from(*n)).collect();
+    let surface = MlsSurface::new(&points, &normals, MlsConfig { cutoff: a.cutoff, ..MlsConfig::new(h) })
+        .with_context(|| format!("{}", a.cloud.display()))?;
+    let q: Vec<Point> = queries.points.iter().map(|p| Point::from(*p)).collect();
+    let results = surface.curvature_at_points(&q, par);
+    const NAMES: [&str; 21] = [
+        "x", "y", "z", "g", "gx", "gy", "gz", "hxx", "hxy", "hxz", "hyy", "hyz", "hzz", "nx", "ny", "nz", "k1", "k2", "mean",
+        "gauss", "status",
+    ];
+    let mut cols: Vec<Vec<f64>> = vec![Vec::with_capacity(q.len()); 20];
+    let mut status = Vec::with_capacity(q.len());
+    for (r, p) in results.iter().zip(&q) {
+        status.push(status_code(r));
+        let row: [f64; 20] = match r {
+            Ok(sp) => {
+                // Undo the underflow shift: these are the true g, ∇g and H (0 where they underflow).
+                let s = (-sp.implicit.log_scale).exp();
+                let (g, gr, hs, c) = (sp.implicit.value * s, sp.implicit.gradient * s, sp.implicit.hessian * s, sp.curvature);
+                let n = sp.implicit.field.normal;
+                [
+                    p.x, p.y, p.z, g, gr.x, gr.y, gr.z, hs[(0, 0)], hs[(0, 1)], hs[(0, 2)], hs[(1, 1)], hs[(1, 2)],
+                    hs[(2, 2)], n.x, n.y, n.z, c.k1, c.k2, c.mean, c.gauss,
+                ]
+            }
+            Err(_) => {
+                let mut row = [f64::NAN; 20];
+                row[..3].copy_from_slice(&[p.x, p.y, p.z]);
+                row
+            }
+        };
+        for (c, v) in cols.iter_mut().zip(row) {
+            c.push(v);
+        }
+    }
+    let mut columns: Vec<Column<'_>> = NAMES[..20].iter().zip(&cols).map(|(name, c)| Column::f64(name, c)).collect();
+    columns.push(Column::i32("status", &status));
+    match &a.output {
+        Some(path) => {
+            pipeline::check_output(&a.cloud, path)?;
+            pipeline::check_output(&a.queries, path)?;
+            mls_io::write_csv(path, &columns)?;
+        }
+        None => mls_io::write_csv_to(std::io::stdout().lock(), "<stdout>", &columns)?,
+    }
+    Ok(())
+}
+
+pub fn normals(a: NormalsArgs) -> Result<()> {
+    pipeline::check_output(&a.input, &a.out.output)?;
+    pipeline::with_threads(a.threads, || {
+        let mut t = Timings::default();
+        let par = Parallelism::Rayon;
+        let cloud = t.time("read", || pipeline::read(&a.input))?;
+        let points = pipeline::to_points(&cloud);
+        let scale = t.time("spacing", || pipeline::choose_h(&points, a.h, a.h_factor, par, &a.input))?;
+        let est = t.time("normals", || {
+            pipeline::normals(&cloud, &points, crate::NormalsMode::Estimate, a.orient, scale.h, par, &a.input)
+        })?;
+        let nrm: Vec<[f64; 3]> = est.normals.iter().map(|n| n.map_or([0.0; 3], Into::into)).collect();
+        let status: Vec<i32> = est
+            .normals
+            .iter()
+            .map(|n| if n.is_some() { 0 } else { i32::from(PointStatus::NormalEstimationFailed.code()) })
+            .collect();
+        let mut columns = Vec::new();
+        columns.extend(vector_columns(["x", "y", "z"], &cloud.points));
+        columns.extend(vector_columns(["nx", "ny", "nz"], &nrm));
+        // XYZ files have no header: keep them to the 6 columns every tool reads back.
+        if mls_io::FileFormat::from_path(&a.out.output) != Some(mls_io::FileFormat::Xyz) {
+            columns.push(Column::i32("status", &status));
+        }
+        t.time("write", || mls_io::write_point_cloud(&a.out.output, &columns, ply_format(a.out.ascii)))?;
+        if !a.quiet {
+            eprintln!("mlscurv normals: {}", a.input.display());
+            eprintln!("  points read     {}", points.len());
+            eprintln!("  h               {:.6} = {}", scale.h, scale.why);
+            eprintln!("  normals         {}", est.source);
+            eprintln!("  status          {} (failed normals are written as 0 0 0)", pipeline::status_counts(&status));
+            print_timings(&t, points.len());
+            eprintln!("  wrote           {}", a.out.output.display());
+        }
+        Ok(())
+    })
+}
+
+pub fn project(a: ProjectArgs) -> Result<()> {
+    pipeline::check_output(&a.input, &a.out.output)?;
+    let s = &a.surface;
+    pipeline::with_threads(s.threads, || {
+        let mut t = Timings::default();
+        let par = Parallelism::Rayon;
+        let cloud = t.time("read", || pipeline::read(&a.input))?;
+        let points = pipeline::to_points(&cloud);
+        let scale = t.time("spacing", || pipeline::choose_h(&points, s.h, s.h_factor, par, &a.input))?;
+        let normals = t.time("normals", || pipeline::normals(&cloud, &points, s.normals, s.orient, scale.h, par, &a.input))?;
+        let surface = t.time("index", || pipeline::surface(&points, &normals.normals, scale.h, s.cutoff, &a.input))?;
+        let results = t.time("projection", || {
+            crate::progress::chunked(points.len(), "projection", interactive(s.quiet), |r| {
+                surface.project_points(&points[r], par)
+            })
+        });
+        let mut pos = Vec::with_capacity(points.len());
+        let mut nrm = Vec::with_capacity(points.len());
+        let mut status = Vec::with_capacity(points.len());
+        for (r, p) in results.iter().zip(&cloud.points) {
+            status.push(status_code(r));
+            match r {
+                Ok(sp) => {
+                    pos.push(sp.point.coords.into());
+                    nrm.push(sp.curvature.normal.into());
+                }
+                Err(_) => {
+                    pos.push(*p);
+                    nrm.push(NAN3);
+                }
+            }
+        }
+        let mut columns = Vec::new();
+        columns.extend(vector_columns(["x", "y", "z"], &pos));
+        columns.extend(vector_columns(["nx", "ny", "nz"], &nrm));
+        columns.push(Column::i32("status", &status));
+        t.time("write", || mls_io::write_point_cloud(&a.out.output, &columns, ply_format(a.out.ascii)))?;
+        if !s.quiet {
+            let moved: Vec<f64> =
+                pos.iter().zip(&cloud.points).zip(&status).filter(|(_, s)| **s == 0).map(|((a, b), _)| dist(a, b)).collect();
+            eprintln!("mlscurv project: {}", a.input.display());
+            eprintln!("  points read     {}", points.len());
+            eprintln!("  h               {:.6} = {}", scale.h, scale.why);
+            eprintln!("  normals         {}", normals.source);
+            eprintln!("  status          {}", pipeline::status_counts(&status));
+            eprintln!("  displacement    {}", pipeline::percentiles(&moved));
+            print_timings(&t, points.len());
+            eprintln!("  wrote           {}", a.out.output.display());
+        }
+        Ok(())
+    })
+}
+
+fn dist(a: &[f64; 3], b: &[f64; 3]) -> f64 {
+    ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
+}
+
+pub fn info(a: InfoArgs) -> Result<()> {
+    let cloud = mls_io::read_point_cloud(&a.input)?;
+    let points = pipeline::to_points(&cloud);
+    println!("file            {}", a.input.display());
+    println!("points          {}", points.len());
+    if points.is_empty() {
+        return Ok(());
+    }
+    let (lo, hi) = points.iter().fold((points[0].coords, points[0].coords), |(lo, hi), p| (lo.inf(&p.coords), hi.sup(&p.coords)));
+    println!("bounding box    [{:.6}, {:.6}, {:.6}] .. [{:.6}, {:.6}, {:.6}]", lo.x, lo.y, lo.z, hi.x, hi.y, hi.z);
+    let size = hi - lo;
+    println!("size            {:.6} × {:.6} × {:.6}", size.x, size.y, size.z);
+    match pipeline::choose_h(&points, None, mls_core::normals::DEFAULT_H_FACTOR, Parallelism::Rayon, &a.input) {
+        Ok(scale) => {
+            if let Some(s) = scale.spacing {
+                println!(
+                    "spacing         {:.6} (median local); nearest neighbour min {:.6}, median {:.6}, p90 {:.6}, max {:.6}",
+                    s.spacing, s.nearest.min, s.nearest.median, s.nearest.p90, s.nearest.max
+                );
+                println!("duplicates      {}", s.duplicates);
+            }
+            println!("suggested h     {:.6} ({})", scale.h, scale.why);
+        }
+        Err(e) => println!("spacing         unavailable: {e:#}"),
+    }
+    match &cloud.normals {
+        None => println!("normals         absent (curvature will estimate and orient them)"),
+        Some(n) => {
+            let normals: Vec<Vector> = n.iter().map(|n| Vector::from(*n)).collect();
+            let zero = normals.iter().filter(|n| mls_core::UnitNormal::new(**n).is_err()).count();
+            let graph = NeighbourGraph::build(&points, DEFAULT_NEIGHBOURS, Parallelism::Rayon)?;
+            let consistency = orientation_consistency(&graph, &normals, Parallelism::Rayon)?;
+            let verdict = match consistency {
+                Some(c) if c >= 0.99 => format!("consistently oriented ({:.2}% of neighbour pairs agree)", 100.0 * c),
+                Some(c) => format!(
+                    "NOT consistently oriented: {:.2}% of neighbour pairs agree (use --normals estimate)",
+                    100.0 * c
+                ),
+                None => "orientation unknown (no neighbour pairs with normals)".into(),
+            };
+            println!("normals         present, {zero} zero or invalid; {verdict}");
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,247 @@
+//! `mlscurv`: signed principal curvatures of point-cloud files on the MLS surface
+//! (Yang & Qian 2007). See `mlscurv --help` and the README.
+
+use std::io::IsTerminal as _;
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use clap::{Args, Parser, Subcommand, ValueEnum};
+use mls_core::PointStatus;
+
+mod commands;
+mod pipeline;
+mod progress;
+
+#[derive(Debug, Parser)]
+#[command(name = "mlscurv", version, about = "Exact curvature of point clouds on the MLS surface (Yang & Qian 2007)")]
+#[command(after_help = STATUS_HELP)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+const STATUS_HELP: &str = "\
+Status codes (column `status`):
+  0  ok
+  1  no_neighbours              no sample within the kernel support (isolated point)
+  2  too_few_neighbours         fewer than 3 samples within the support
+  3  normal_undefined           weighted normals cancel: normal field undefined
+  4  gradient_vanishes          gradient of g vanishes: level set has no normal
+  5  projection_failed          MLS projection found no energy minimum or did not converge
+  6  invalid_query              query point has a non-finite coordinate
+  7  normal_estimation_failed   normal could not be estimated (degenerate neighbourhood)
+Numbers of a point with a non-zero status are NaN.
+
+Sign convention: curvature is positive where the surface bends away from the oriented normal
+(a sphere with outward normals has k1 = k2 = mean = 1/R); mean = (k1 + k2)/2; k1 >= k2.";
+
+#[derive(Debug, Subcommand)]
+enum Command {
+    /// Principal curvatures, directions, mean and Gaussian curvature at every point.
+    Curvature(CurvatureArgs),
+    /// The raw implicit function g, its gradient and Hessian at arbitrary query points.
+    Eval(EvalArgs),
+    /// Estimate and orient normals only.
+    Normals(NormalsArgs),
+    /// Project the points onto the MLS surface (denoised points with normals).
+    Project(ProjectArgs),
+    /// Point count, bounding box, spacing, suggested h, normals.
+    Info(InfoArgs),
+}
+
+/// Where normals come from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+enum NormalsMode {
+    /// The file's normals if it has them, else estimate.
+    Auto,
+    /// The file's normals (an error if it has none).
+    File,
+    /// Estimate from the points, ignoring any normals in the file.
+    Estimate,
+}
+
+/// Where curvature is evaluated.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+enum At {
+    /// At the input points: the level set of g through each point.
+    Input,
+    /// At the input points projected onto the MLS surface.
+    Projected,
+}
+
+/// Options shared by the commands that build an MLS surface.
+#[derive(Debug, Args)]
+struct SurfaceArgs {
+    /// Gaussian scale h, in the units of the file. Default: --h-factor × the point spacing.
+    #[arg(long, value_parser = positive_finite, conflicts_with = "h_factor")]
+    h: Option<f64>,
+    /// h as a multiple of the median local point spacing.
+    #[arg(long, value_parser = positive_finite, default_value_t = mls_core::normals::DEFAULT_H_FACTOR)]
+    h_factor: f64,
+    /// Kernel cutoff radius in units of h (at least 2), or `none` for the untruncated kernel.
+    #[arg(long, value_parser = parse_cutoff, default_value = "5")]
+    cutoff: mls_core::Cutoff,
+    /// Where normals come from.
+    #[arg(long, value_enum, default_value_t = NormalsMode::Auto)]
+    normals: NormalsMode,
+    /// Orientation of estimated normals: `mst` (outward, by minimum spanning tree),
+    /// `viewpoint:X,Y,Z` (towards a scanner position), or `none`.
+    #[arg(long, value_parser = parse_orient, default_value = "mst")]
+    orient: mls_core::normals::Orientation,
+    /// Worker threads (default: all cores).
+    #[arg(long, value_parser = clap::value_parser!(u16).range(1..))]
+    threads: Option<u16>,
+    /// No summary or progress on stderr.
+    #[arg(long, short)]
+    quiet: bool,
+}
+
+#[derive(Debug, Args)]
+struct OutputArgs {
+    /// Output file: .ply (binary little endian unless --ascii), .csv, .xyz/.txt.
+    #[arg(short, long)]
+    output: PathBuf,
+    /// Write PLY as ASCII.
+    #[arg(long)]
+    ascii: bool,
+}
+
+#[derive(Debug, Args)]
+struct CurvatureArgs {
+    /// Input point cloud: .ply, .xyz/.txt/.pts, or .csv with a header.
+    input: PathBuf,
+    #[command(flatten)]
+    out: OutputArgs,
+    #[command(flatten)]
+    surface: SurfaceArgs,
+    /// Evaluate at the input points or at their projections onto the MLS surface.
+    #[arg(long, value_enum, default_value_t = At::Input)]
+    at: At,
+}
+
+#[derive(Debug, Args)]
+struct EvalArgs {
+    /// The cloud defining the surface; it must carry normals.
+    #[arg(long)]
+    cloud: PathBuf,
+    /// The query points (any supported format; normals in it are ignored).
+    #[arg(long = "at")]
+    queries: PathBuf,
+    /// Gaussian scale h. Default: 2 × the point spacing of the cloud.
+    #[arg(long, value_parser = positive_finite)]
+    h: Option<f64>,
+    /// Kernel cutoff radius in units of h, or `none`.
+    #[arg(long, value_parser = parse_cutoff, default_value = "5")]
+    cutoff: mls_core::Cutoff,
+    /// Output CSV; standard output when absent.
+    #[arg(short, long)]
+    output: Option<PathBuf>,
+}
+
+#[derive(Debug, Args)]
+struct NormalsArgs {
+    /// Input point cloud.
+    input: PathBuf,
+    #[command(flatten)]
+    out: OutputArgs,
+    /// Scale h of the covariance weights. Default: --h-factor × the point spacing.
+    #[arg(long, value_parser = positive_finite, conflicts_with = "h_factor")]
+    h: Option<f64>,
+    /// h as a multiple of the median local point spacing.
+    #[arg(long, value_parser = positive_finite, default_value_t = mls_core::normals::DEFAULT_H_FACTOR)]
+    h_factor: f64,
+    /// Orientation: `mst`, `viewpoint:X,Y,Z`, or `none`.
+    #[arg(long, value_parser = parse_orient, default_value = "mst")]
+    orient: mls_core::normals::Orientation,
+    /// Worker threads (default: all cores).
+    #[arg(long, value_parser = clap::value_parser!(u16).range(1..))]
+    threads: Option<u16>,
+    /// No summary or progress on stderr.
+    #[arg(long, short)]
+    quiet: bool,
+}
+
+#[derive(Debug, Args)]
+struct ProjectArgs {
+    /// Input point cloud.
+    input: PathBuf,
+    #[command(flatten)]
+    out: OutputArgs,
+    #[command(flatten)]
+    surface: SurfaceArgs,
+}
+
+#[derive(Debug, Args)]
+struct InfoArgs {
+    /// Input point cloud.
+    input: PathBuf,
+}
+
+fn positive_finite(s: &str) -> Result<f64, String> {
+    let v: f64 = s.trim().parse().map_err(|_| format!("`{s}` is not a number"))?;
+    if v.is_finite() && v > 0.0 { Ok(v) } else { Err(format!("must be finite and positive, got {s}")) }
+}
+
+fn parse_cutoff(s: &str) -> Result<mls_core::Cutoff, String> {
+    if s.eq_ignore_ascii_case("none") {
+        return Ok(mls_core::Cutoff::None);
+    }
+    let c = positive_finite(s)?;
+    if c < mls_core::Cutoff::MIN_FACTOR {
+        return Err(format!("must be at least {} (in units of h) or `none`, got {s}", mls_core::Cutoff::MIN_FACTOR));
+    }
+    Ok(mls_core::Cutoff::Radius(c))
+}
+
+fn parse_orient(s: &str) -> Result<mls_core::normals::Orientation, String> {
+    use mls_core::normals::Orientation;
+    match s {
+        "mst" => Ok(Orientation::Outward),
+        "none" => Ok(Orientation::None),
+        _ => {
+            let Some(rest) = s.strip_prefix("viewpoint:") else {
+                return Err(format!("expected `mst`, `none` or `viewpoint:X,Y,Z`, got `{s}`"));
+            };
+            let v: Vec<f64> = rest
+                .split(',')
+                .map(|c| c.trim().parse::<f64>().ok().filter(|v| v.is_finite()))
+                .collect::<Option<_>>()
+                .ok_or_else(|| format!("viewpoint needs three finite numbers X,Y,Z, got `{rest}`"))?;
+            let [x, y, z] = v[..] else {
+                return Err(format!("viewpoint needs three numbers X,Y,Z, got `{rest}`"));
+            };
+            Ok(Orientation::Viewpoint(mls_core::Point::new(x, y, z)))
+        }
+    }
+}
+
+/// Whether progress bars may be drawn.
+fn interactive(quiet: bool) -> bool {
+    !quiet && std::io::stderr().is_terminal()
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Curvature(a) => commands::curvature(a),
+        Command::Eval(a) => commands::eval(a),
+        Command::Normals(a) => commands::normals(a),
+        Command::Project(a) => commands::project(a),
+        Command::Info(a) => commands::info(a),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("mlscurv: error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+/// The numeric status written to files.
+fn status_code(r: &Result<impl Sized, PointStatus>) -> i32 {
+    match r {
+        Ok(_) => 0,
+        Err(s) => i32::from(s.code()),
+    }
+}

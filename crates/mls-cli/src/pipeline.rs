@@ -1,0 +1,183 @@
+//! Shared steps: read and check the input, choose h, get oriented normals, build the surface.
+
+use std::path::Path;
+use std::time::Instant;
+
+use anyhow::{Context, Result, bail};
+use mls_core::normals::{
+    DEFAULT_NEIGHBOURS, DEFAULT_SPACING_NEIGHBOURS, NormalsConfig, Orientation, SpacingStats, estimate_normals,
+    spacing_statistics, suggest_h,
+};
+use mls_core::{Cutoff, MlsConfig, MlsSurface, Parallelism, Point, PointStatus, Vector};
+use mls_io::PointCloud;
+
+use crate::NormalsMode;
+
+/// The smallest cloud a neighbourhood can be built from: a covariance normal needs 3 points
+/// besides the centre, the MLS evaluation at least 3 samples.
+pub const MIN_POINTS: usize = 4;
+
+/// Wall-clock time of the named stages, for the summary.
+#[derive(Debug, Default)]
+pub struct Timings(pub Vec<(&'static str, f64)>);
+
+impl Timings {
+    pub fn time<T>(&mut self, stage: &'static str, f: impl FnOnce() -> T) -> T {
+        let t = Instant::now();
+        let out = f();
+        self.0.push((stage, t.elapsed().as_secs_f64()));
+        out
+    }
+}
+
+/// Reads a cloud and checks it has enough points.
+pub fn read(path: &Path) -> Result<PointCloud> {
+    let cloud = mls_io::read_point_cloud(path)?;
+    if cloud.points.len() < MIN_POINTS {
+        bail!("{}: {} point(s); at least {MIN_POINTS} are needed to build a neighbourhood", path.display(), cloud.points.len());
+    }
+    Ok(cloud)
+}
+
+/// Refuses to overwrite the input with the output.
+pub fn check_output(input: &Path, output: &Path) -> Result<()> {
+    if mls_io::same_file(input, output) {
+        bail!("{}: output path is the input file; refusing to overwrite it", output.display());
+    }
+    Ok(())
+}
+
+pub fn to_points(cloud: &PointCloud) -> Vec<Point> {
+    cloud.points.iter().map(|p| Point::from(*p)).collect()
+}
+
+/// The chosen h and a sentence on why.
+pub struct Scale {
+    pub h: f64,
+    pub why: String,
+    pub spacing: Option<SpacingStats>,
+}
+
+pub fn choose_h(points: &[Point], h: Option<f64>, factor: f64, par: Parallelism, file: &Path) -> Result<Scale> {
+    if let Some(h) = h {
+        return Ok(Scale { h, why: "given with --h".into(), spacing: None });
+    }
+    let stats = spacing_statistics(points, DEFAULT_SPACING_NEIGHBOURS, par)
+        .with_context(|| format!("{}: cannot measure the point spacing", file.display()))?;
+    let h = suggest_h(&stats, factor).with_context(|| format!("{}: cannot derive h from the spacing", file.display()))?;
+    Ok(Scale {
+        h,
+        why: format!(
+            "{factor} × median local spacing {:.6} (over {} neighbours; use --h or --h-factor to change)",
+            stats.spacing, stats.k
+        ),
+        spacing: Some(stats),
+    })
+}
+
+/// Oriented normals, one per point (`None` where none could be had), and their source.
+pub struct Normals {
+    pub normals: Vec<Option<Vector>>,
+    pub source: String,
+}
+
+pub fn normals(
+    cloud: &PointCloud,
+    points: &[Point],
+    mode: NormalsMode,
+    orientation: Orientation,
+    h: f64,
+    par: Parallelism,
+    file: &Path,
+) -> Result<Normals> {
+    let from_file = match (mode, &cloud.normals) {
+        (NormalsMode::File, None) => {
+            bail!("{}: --normals file given but the file has no normals (nx, ny, nz)", file.display())
+        }
+        (NormalsMode::File | NormalsMode::Auto, Some(n)) => Some(n),
+        _ => None,
+    };
+    if let Some(file_normals) = from_file {
+        let normals: Vec<Option<Vector>> = file_normals
+            .iter()
+            .map(|n| mls_core::UnitNormal::new(Vector::from(*n)).ok().map(|u| u.into_inner()))
+            .collect();
+        let bad = normals.iter().filter(|n| n.is_none()).count();
+        let source = if bad == 0 {
+            "from the file".to_string()
+        } else {
+            format!("from the file ({bad} zero normals left out of the surface)")
+        };
+        return Ok(Normals { normals, source });
+    }
+    let config = NormalsConfig { k: DEFAULT_NEIGHBOURS, h: Some(h), orientation, ..NormalsConfig::default() };
+    let est = estimate_normals(points, &config, par).with_context(|| format!("{}: normal estimation", file.display()))?;
+    let orient = match orientation {
+        Orientation::Outward => "oriented outward by minimum spanning tree".to_string(),
+        Orientation::Viewpoint(v) => format!("oriented towards the viewpoint ({}, {}, {})", v.x, v.y, v.z),
+        Orientation::None => "not oriented (--orient none)".to_string(),
+    };
+    let consistency = est.report.consistency.map(|c| format!(", {:.2}% of neighbour pairs agree", 100.0 * c)).unwrap_or_default();
+    let source = format!(
+        "estimated (weighted covariance, {} neighbours), {orient}: {} component(s){consistency}; {} failed",
+        DEFAULT_NEIGHBOURS,
+        est.report.components,
+        est.failed()
+    );
+    Ok(Normals { normals: est.normals().into_iter().map(Result::ok).collect(), source })
+}
+
+/// Builds the surface from the points that have normals.
+pub fn surface(points: &[Point], normals: &[Option<Vector>], h: f64, cutoff: Cutoff, file: &Path) -> Result<MlsSurface> {
+    let (p, n): (Vec<Point>, Vec<Vector>) =
+        points.iter().zip(normals).filter_map(|(p, n)| n.map(|n| (*p, n))).unzip();
+    if p.len() < MIN_POINTS {
+        bail!("{}: only {} point(s) have a normal; at least {MIN_POINTS} are needed", file.display(), p.len());
+    }
+    MlsSurface::new(&p, &n, MlsConfig { cutoff, ..MlsConfig::new(h) }).with_context(|| format!("{}", file.display()))
+}
+
+/// Runs `f` on a rayon pool with the requested number of threads (all cores by default).
+pub fn with_threads<T: Send>(threads: Option<u16>, f: impl FnOnce() -> Result<T> + Send) -> Result<T> {
+    match threads {
+        None => f(),
+        Some(n) => rayon::ThreadPoolBuilder::new()
+            .num_threads(usize::from(n))
+            .build()
+            .context("cannot start the worker threads")?
+            .install(f),
+    }
+}
+
+/// Counts of each status, in code order.
+pub fn status_counts(codes: &[i32]) -> String {
+    let ok = codes.iter().filter(|&&c| c == 0).count();
+    let mut parts = vec![format!("ok {ok}")];
+    for s in PointStatus::ALL {
+        let n = codes.iter().filter(|&&c| c == i32::from(s.code())).count();
+        if n > 0 {
+            parts.push(format!("{} {n}", s.name()));
+        }
+    }
+    parts.join(", ")
+}
+
+/// A few percentiles of the finite values.
+pub fn percentiles(values: &[f64]) -> String {
+    let mut v: Vec<f64> = values.iter().copied().filter(|v| v.is_finite()).collect();
+    if v.is_empty() {
+        return "no values".into();
+    }
+    v.sort_unstable_by(f64::total_cmp);
+    let q = |p: f64| v[((v.len() - 1) as f64 * p).round() as usize];
+    format!(
+        "p1 {:+.4e}  p5 {:+.4e}  p25 {:+.4e}  p50 {:+.4e}  p75 {:+.4e}  p95 {:+.4e}  p99 {:+.4e}",
+        q(0.01),
+        q(0.05),
+        q(0.25),
+        q(0.5),
+        q(0.75),
+        q(0.95),
+        q(0.99)
+    )
+}

@@ -1,0 +1,126 @@
+//! The k-nearest-neighbour graph of a cloud.
+
+use std::num::NonZeroUsize;
+
+use kiddo::{ImmutableKdTree, SquaredEuclidean};
+use rayon::prelude::*;
+
+use super::{NormalsError, bounding_box_centre, check_points};
+use crate::math::Point;
+use crate::surface::Parallelism;
+
+/// The `k` nearest neighbours of every point, the point itself excluded, nearest first.
+///
+/// Stored flat: the neighbours of point `i` are `as_flat()[i·k .. (i+1)·k]`, as `u32` indices
+/// into the cloud. Every point has exactly [`k`](Self::k) neighbours, where `k` is the
+/// requested size clamped to `len − 1` (a cloud of at most `k` points uses all the other
+/// points). Duplicate positions are ordinary neighbours at distance 0: excluding "the point
+/// itself" goes by index, not by position.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct NeighbourGraph {
+    points: usize,
+    k: usize,
+    neighbours: Vec<u32>,
+}
+
+impl NeighbourGraph {
+    /// Finds the `k` nearest neighbours of every point with a kd-tree.
+    ///
+    /// Ties in distance are broken by the kd-tree, not by index, so among equidistant
+    /// candidates (a regular grid) which one is kept is unspecified; the distances are exact.
+    pub fn build(points: &[Point], k: usize, par: Parallelism) -> Result<Self, NormalsError> {
+        if k == 0 {
+            return Err(NormalsError::InvalidNeighbourCount { min: 1, got: 0 });
+        }
+        check_points(points)?;
+        let n = points.len();
+        let k_eff = k.min(n.saturating_sub(1));
+        let mut neighbours = vec![0_u32; n * k_eff];
+        if k_eff == 0 {
+            return Ok(Self {
+                points: n,
+                k: 0,
+                neighbours,
+            });
+        }
+        let centre = bounding_box_centre(points);
+        let coords: Vec<[f64; 3]> = points.iter().map(|p| (p.coords - centre).into()).collect();
+        let tree = ImmutableKdTree::<f64, 3>::new_from_slice(&coords)
+            .map_err(|_| NormalsError::TooManyPoints(n))?;
+        let fill = |(i, row): (usize, &mut [u32])| fill_row(&tree, &coords, i, row);
+        match par {
+            Parallelism::Sequential => neighbours.chunks_mut(k_eff).enumerate().for_each(fill),
+            Parallelism::Rayon => neighbours
+                .par_chunks_mut(k_eff)
+                .with_min_len(256)
+                .enumerate()
+                .for_each(fill),
+        }
+        Ok(Self {
+            points: n,
+            k: k_eff,
+            neighbours,
+        })
+    }
+
+    /// Neighbours per point (the requested `k`, clamped to `len − 1`).
+    pub fn k(&self) -> usize {
+        self.k
+    }
+
+    /// Number of points.
+    pub fn len(&self) -> usize {
+        self.points
+    }
+
+    /// Whether the graph has no points.
+    pub fn is_empty(&self) -> bool {
+        self.points == 0
+    }
+
+    /// The neighbours of point `i`, nearest first (empty if `i` is out of range).
+    pub fn neighbours(&self, i: usize) -> &[u32] {
+        let start = i.saturating_mul(self.k);
+        self.neighbours
+            .get(start..start.saturating_add(self.k))
+            .unwrap_or(&[])
+    }
+
+    /// All neighbour lists, `k` per point.
+    pub fn as_flat(&self) -> &[u32] {
+        &self.neighbours
+    }
+
+    /// All neighbour lists, `k` per point, by value.
+    pub fn into_flat(self) -> Vec<u32> {
+        self.neighbours
+    }
+}
+
+/// Writes the `row.len()` nearest neighbours of point `i` into `row`.
+fn fill_row(tree: &ImmutableKdTree<f64, 3>, coords: &[[f64; 3]], i: usize, row: &mut [u32]) {
+    let k = row.len();
+    // One extra result covers the point itself. With more than k+1 copies of one position the
+    // point itself may be missing from the result; then the first k are all valid neighbours.
+    let Some(wanted) = NonZeroUsize::new(k + 1) else {
+        return;
+    };
+    let hits = tree
+        .query(&coords[i])
+        .nearest_n::<SquaredEuclidean<f64>>(wanted)
+        .execute();
+    let mut filled = 0;
+    for hit in hits.iter().filter(|h| h.item as usize != i).take(k) {
+        row[filled] = hit.item;
+        filled += 1;
+    }
+    // The tree holds at least k + 1 points, so it always returns k others. Should that ever
+    // fail, repeating the last neighbour keeps the row valid (a repeated edge is harmless to
+    // the covariance and to the spanning tree) where indexing past the hits would panic.
+    let last = if filled > 0 {
+        row[filled - 1]
+    } else {
+        ((i + 1) % coords.len()) as u32
+    };
+    row[filled..].fill(last);
+}

@@ -1,0 +1,231 @@
+//! Typed errors: one enum for reading, one for writing.
+//!
+//! Every message is a single line that starts with the file name, so a command-line tool can
+//! print it as it is. Text taken from the input is quoted with escapes and shortened, so a
+//! malformed file cannot break that rule.
+
+use std::io;
+
+/// Why a point cloud could not be read.
+///
+/// `file` is the path as given (or the display name passed to a stream reader). Line numbers
+/// count from 1; byte offsets count from 0 at the start of the file; vertex and element
+/// indices count from 0, as PLY face lists do.
+#[derive(Debug, thiserror::Error)]
+pub enum ReadError {
+    /// The file could not be opened, or reading from it failed.
+    #[error("{file}: {source}")]
+    Io {
+        /// The file.
+        file: String,
+        /// The operating-system error.
+        source: io::Error,
+    },
+    /// The file name has no extension, so its format is unknown.
+    #[error("{file}: no file extension; expected .ply, .xyz, .txt, .pts or .csv")]
+    NoExtension {
+        /// The file.
+        file: String,
+    },
+    /// The file name has an extension that names no supported format.
+    #[error("{file}: unknown extension \".{extension}\"; expected .ply, .xyz, .txt, .pts or .csv")]
+    UnknownExtension {
+        /// The file.
+        file: String,
+        /// The extension, without the dot.
+        extension: String,
+    },
+    /// The PLY header (or the CSV header row) is malformed: bad magic, missing `end_header`,
+    /// unknown format, keyword or property type, duplicate property, and the like.
+    #[error("{file}: header line {line}: {message}")]
+    Header {
+        /// The file.
+        file: String,
+        /// The header line at fault.
+        line: usize,
+        /// What is wrong with it.
+        message: String,
+    },
+    /// A required coordinate (`x`, `y` or `z`) is not among the PLY vertex properties or the
+    /// CSV columns.
+    #[error("{file}: line {line}: no \"{field}\" field; x, y and z are required")]
+    MissingField {
+        /// The file.
+        file: String,
+        /// The line that declares the fields (the PLY `element vertex` line or the CSV header).
+        line: usize,
+        /// The missing field.
+        field: &'static str,
+    },
+    /// Some but not all of `nx`, `ny`, `nz` are present.
+    #[error("{file}: line {line}: normals need all of nx, ny and nz, but {missing} missing")]
+    PartialNormals {
+        /// The file.
+        file: String,
+        /// The line that declares the fields (the PLY `element vertex` line or the CSV header).
+        line: usize,
+        /// The missing components with a verb, e.g. `"nz is"` or `"ny and nz are"`.
+        missing: String,
+    },
+    /// The first data row of an XYZ/TXT/PTS file has a column count other than 3 (points)
+    /// or 6 (points and normals).
+    #[error(
+        "{file}: line {line}: {found} columns; expected 3 (x y z) or 6 (x y z nx ny nz), \
+         whitespace-separated"
+    )]
+    UnsupportedColumnCount {
+        /// The file.
+        file: String,
+        /// The first data row.
+        line: usize,
+        /// Its number of columns.
+        found: usize,
+    },
+    /// A row has a different number of columns from the first data row (XYZ) or the header
+    /// (CSV).
+    #[error("{file}: line {line}: {found} columns, expected {expected}")]
+    ColumnCount {
+        /// The file.
+        file: String,
+        /// The row at fault.
+        line: usize,
+        /// Its number of columns.
+        found: usize,
+        /// The number every row must have.
+        expected: usize,
+    },
+    /// A value in a text file (ASCII PLY, XYZ, CSV) is missing, not a number, not finite, or
+    /// the file ends before the header's element count is reached.
+    #[error("{file}: line {line}, {field}: {message}")]
+    Ascii {
+        /// The file.
+        file: String,
+        /// The line at fault.
+        line: usize,
+        /// The field, e.g. `vertex 17 property y` or `column 2 (y)`.
+        field: String,
+        /// What is wrong with it.
+        message: String,
+    },
+    /// A value in a binary PLY body is invalid: a NaN or infinite coordinate or normal, or a
+    /// negative list length.
+    #[error("{file}: {message} at byte {offset}, {field}")]
+    Binary {
+        /// The file.
+        file: String,
+        /// Where the value starts.
+        offset: u64,
+        /// The value, e.g. `vertex 17 property y (float32)`.
+        field: String,
+        /// What is wrong with it.
+        message: String,
+    },
+    /// A binary PLY body ends before the header's element counts are reached.
+    #[error("{file}: truncated binary body at byte {offset}: expected {field}")]
+    Truncated {
+        /// The file.
+        file: String,
+        /// Where the missing value would start.
+        offset: u64,
+        /// The value, e.g. `vertex 17 property y (float32)`.
+        field: String,
+    },
+}
+
+/// Why a table could not be written. On any of these the destination file is untouched.
+#[derive(Debug, thiserror::Error)]
+pub enum WriteError {
+    /// Creating the temporary file, writing, syncing it or renaming it over the destination
+    /// failed (for example, the directory does not exist or is not writable).
+    #[error("{file}: {source}")]
+    Io {
+        /// The destination.
+        file: String,
+        /// The operating-system error.
+        source: io::Error,
+    },
+    /// The destination path has no file name (such as `/` or `..`).
+    #[error("{file}: not a file path")]
+    NotAFilePath {
+        /// The destination.
+        file: String,
+    },
+    /// The destination has no extension, so the output format is unknown.
+    #[error("{file}: no file extension; expected .ply, .csv, .xyz, .txt or .pts")]
+    NoExtension {
+        /// The destination.
+        file: String,
+    },
+    /// The destination's extension names no supported output format.
+    #[error("{file}: unknown extension \".{extension}\"; expected .ply, .csv, .xyz, .txt or .pts")]
+    UnknownExtension {
+        /// The destination.
+        file: String,
+        /// The extension, without the dot.
+        extension: String,
+    },
+    /// No columns were given.
+    #[error("{file}: no columns to write")]
+    NoColumns {
+        /// The destination.
+        file: String,
+    },
+    /// Two columns have different lengths.
+    #[error("{file}: column \"{column}\" has {len} rows but column \"{first}\" has {expected}")]
+    LengthMismatch {
+        /// The destination.
+        file: String,
+        /// The first column.
+        first: String,
+        /// Its length, which every column must have.
+        expected: usize,
+        /// The column at fault.
+        column: String,
+        /// Its length.
+        len: usize,
+    },
+    /// A column name would not survive a round trip through PLY or CSV.
+    #[error("{file}: invalid column name {name:?}: {reason}")]
+    InvalidColumnName {
+        /// The destination.
+        file: String,
+        /// The name at fault.
+        name: String,
+        /// What is wrong with it.
+        reason: &'static str,
+    },
+    /// Two columns have the same name.
+    #[error("{file}: duplicate column name \"{name}\"")]
+    DuplicateColumn {
+        /// The destination.
+        file: String,
+        /// The repeated name.
+        name: String,
+    },
+}
+
+/// Quotes text taken from the input for an error message: escaped, so the message stays on
+/// one line, and shortened, so a runaway token does not swamp it.
+pub(crate) fn quoted(text: &str) -> String {
+    const MAX_CHARS: usize = 40;
+    if text.chars().count() <= MAX_CHARS {
+        format!("{text:?}")
+    } else {
+        let head: String = text.chars().take(MAX_CHARS).collect();
+        format!("{head:?}…")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::quoted;
+
+    #[test]
+    fn quoting_escapes_and_shortens() {
+        assert_eq!(quoted("a\nb"), "\"a\\nb\"");
+        let long = "x".repeat(100);
+        let q = quoted(&long);
+        assert!(q.len() < 50, "{q}");
+        assert!(q.ends_with('…'));
+    }
+}

@@ -1,0 +1,443 @@
+//! Writers: a table of named columns to PLY (binary little-endian or ASCII), CSV or XYZ.
+//!
+//! Files are written atomically: into a temporary file in the destination's directory, which
+//! is flushed, synced and then renamed over the destination. On any error the temporary file
+//! is removed and the destination is untouched.
+
+use std::fmt::Write as _;
+use std::fs::File;
+use std::io::{BufWriter, Write};
+use std::path::Path;
+use std::slice;
+
+use crate::error::WriteError;
+use crate::{FileFormat, detect_format};
+
+/// Size of the output buffer: large enough that a million rows take few system calls.
+const BUFFER_BYTES: usize = 1 << 20;
+
+/// A component of a 3-vector.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Axis {
+    /// The first component.
+    X,
+    /// The second component.
+    Y,
+    /// The third component.
+    Z,
+}
+
+impl Axis {
+    fn of(self, v: &[f64; 3]) -> f64 {
+        let [x, y, z] = *v;
+        match self {
+            Self::X => x,
+            Self::Y => y,
+            Self::Z => z,
+        }
+    }
+}
+
+/// The values of one column, borrowed from the caller.
+#[derive(Clone, Copy, Debug)]
+pub enum ColumnData<'a> {
+    /// Floating-point values: PLY `double`, text with enough digits to round-trip exactly.
+    F64(&'a [f64]),
+    /// Integer values, such as a status code: PLY `int`.
+    I32(&'a [i32]),
+    /// One component of a slice of 3-vectors, e.g. the `y` coordinates of
+    /// [`PointCloud::points`](crate::PointCloud::points), written as `F64` without copying
+    /// them into a column first.
+    Component {
+        /// The vectors.
+        vectors: &'a [[f64; 3]],
+        /// The component to write.
+        axis: Axis,
+    },
+}
+
+impl ColumnData<'_> {
+    /// The number of values (rows).
+    pub fn len(&self) -> usize {
+        match self {
+            Self::F64(data) => data.len(),
+            Self::I32(data) => data.len(),
+            Self::Component { vectors, .. } => vectors.len(),
+        }
+    }
+
+    /// Whether there are no values.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    fn cursor(&self) -> Cursor<'_> {
+        match *self {
+            Self::F64(data) => Cursor::F64(data.iter()),
+            Self::I32(data) => Cursor::I32(data.iter()),
+            Self::Component { vectors, axis } => Cursor::Component(vectors.iter(), axis),
+        }
+    }
+}
+
+/// A named column of a table to write.
+#[derive(Clone, Copy, Debug)]
+pub struct Column<'a> {
+    /// The property (PLY) or header (CSV) name: ASCII letters, digits, `_`, `-` or `.`.
+    pub name: &'a str,
+    /// The values, one per row.
+    pub data: ColumnData<'a>,
+}
+
+impl<'a> Column<'a> {
+    /// A floating-point column.
+    pub fn f64(name: &'a str, data: &'a [f64]) -> Self {
+        Self {
+            name,
+            data: ColumnData::F64(data),
+        }
+    }
+
+    /// An integer column.
+    pub fn i32(name: &'a str, data: &'a [i32]) -> Self {
+        Self {
+            name,
+            data: ColumnData::I32(data),
+        }
+    }
+
+    /// A floating-point column holding one component of `vectors`.
+    pub fn component(name: &'a str, vectors: &'a [[f64; 3]], axis: Axis) -> Self {
+        Self {
+            name,
+            data: ColumnData::Component { vectors, axis },
+        }
+    }
+}
+
+/// The encoding of a PLY file to write.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum PlyFormat {
+    /// `binary_little_endian`: compact, exact and fast; the default.
+    #[default]
+    BinaryLittleEndian,
+    /// `ascii`: readable, still exact (shortest round-trip decimal form).
+    Ascii,
+}
+
+/// Writes `columns` to `path` in the format its extension names (case-insensitive): `.ply`
+/// (in `ply_format`), `.csv`, or `.xyz`, `.txt`, `.pts` (space-separated, no header).
+///
+/// For points and normals only, pass [`PointCloud::columns`](crate::PointCloud::columns).
+///
+/// # Errors
+/// [`WriteError::NoExtension`] or [`WriteError::UnknownExtension`], then those of
+/// [`write_ply`], [`write_csv`] and [`write_xyz`].
+pub fn write_point_cloud(
+    path: &Path,
+    columns: &[Column<'_>],
+    ply_format: PlyFormat,
+) -> Result<(), WriteError> {
+    let file = path.display().to_string();
+    match detect_format(path) {
+        Ok(FileFormat::Ply) => write_ply(path, columns, ply_format),
+        Ok(FileFormat::Csv) => write_csv(path, columns),
+        Ok(FileFormat::Xyz) => write_xyz(path, columns),
+        Err(None) => Err(WriteError::NoExtension { file }),
+        Err(Some(extension)) => Err(WriteError::UnknownExtension { file, extension }),
+    }
+}
+
+/// Writes `columns` as the `vertex` element of a PLY file, atomically: float columns as
+/// `double`, integer columns as `int`, rows in input order.
+///
+/// # Errors
+/// [`WriteError::NoColumns`], [`WriteError::InvalidColumnName`],
+/// [`WriteError::DuplicateColumn`] or [`WriteError::LengthMismatch`] before anything is
+/// written; [`WriteError::NotAFilePath`] or [`WriteError::Io`] (for instance, a missing or
+/// read-only directory), after which no file is left behind.
+pub fn write_ply(path: &Path, columns: &[Column<'_>], format: PlyFormat) -> Result<(), WriteError> {
+    let file = path.display().to_string();
+    let rows = validate(&file, columns)?;
+    write_atomically(path, |out| {
+        write_ply_rows(out, &file, columns, rows, format)
+    })
+}
+
+/// Writes `columns` as CSV, atomically: a header row of the names, then one row per point,
+/// floats in the shortest form that parses back to the same `f64`.
+///
+/// # Errors
+/// As for [`write_ply`].
+pub fn write_csv(path: &Path, columns: &[Column<'_>]) -> Result<(), WriteError> {
+    let file = path.display().to_string();
+    let rows = validate(&file, columns)?;
+    write_atomically(path, |out| {
+        write_text_rows(out, &file, columns, rows, ',', true)
+    })
+}
+
+/// Writes `columns` space-separated without a header, atomically. [`read_xyz`](crate::read_xyz)
+/// reads the result back when the columns are `x y z` or `x y z nx ny nz`.
+///
+/// # Errors
+/// As for [`write_ply`].
+pub fn write_xyz(path: &Path, columns: &[Column<'_>]) -> Result<(), WriteError> {
+    let file = path.display().to_string();
+    let rows = validate(&file, columns)?;
+    write_atomically(path, |out| {
+        write_text_rows(out, &file, columns, rows, ' ', false)
+    })
+}
+
+/// Writes a PLY file to a stream; `name` is the display name used in errors.
+///
+/// # Errors
+/// As for [`write_ply`], with [`WriteError::Io`] for a failing stream.
+pub fn write_ply_to(
+    writer: impl Write,
+    name: &str,
+    columns: &[Column<'_>],
+    format: PlyFormat,
+) -> Result<(), WriteError> {
+    let rows = validate(name, columns)?;
+    let mut out = BufWriter::with_capacity(BUFFER_BYTES, writer);
+    write_ply_rows(&mut out, name, columns, rows, format)?;
+    out.flush().map_err(io_error(name))
+}
+
+/// Writes CSV to a stream; `name` is the display name used in errors.
+///
+/// # Errors
+/// As for [`write_ply_to`].
+pub fn write_csv_to(
+    writer: impl Write,
+    name: &str,
+    columns: &[Column<'_>],
+) -> Result<(), WriteError> {
+    let rows = validate(name, columns)?;
+    let mut out = BufWriter::with_capacity(BUFFER_BYTES, writer);
+    write_text_rows(&mut out, name, columns, rows, ',', true)?;
+    out.flush().map_err(io_error(name))
+}
+
+/// Writes space-separated values to a stream; `name` is the display name used in errors.
+///
+/// # Errors
+/// As for [`write_ply_to`].
+pub fn write_xyz_to(
+    writer: impl Write,
+    name: &str,
+    columns: &[Column<'_>],
+) -> Result<(), WriteError> {
+    let rows = validate(name, columns)?;
+    let mut out = BufWriter::with_capacity(BUFFER_BYTES, writer);
+    write_text_rows(&mut out, name, columns, rows, ' ', false)?;
+    out.flush().map_err(io_error(name))
+}
+
+fn io_error(file: &str) -> impl FnOnce(std::io::Error) -> WriteError + '_ {
+    move |source| WriteError::Io {
+        file: file.to_owned(),
+        source,
+    }
+}
+
+/// Checks the columns before anything is written; returns the number of rows.
+fn validate(file: &str, columns: &[Column<'_>]) -> Result<usize, WriteError> {
+    let Some(first) = columns.first() else {
+        return Err(WriteError::NoColumns {
+            file: file.to_owned(),
+        });
+    };
+    for (index, column) in columns.iter().enumerate() {
+        let reason = if column.name.is_empty() {
+            Some("empty")
+        } else if !column
+            .name
+            .bytes()
+            .all(|b| b.is_ascii_alphanumeric() || matches!(b, b'_' | b'-' | b'.'))
+        {
+            // Whitespace would split a PLY property line, commas and quotes a CSV header.
+            Some("only ASCII letters, digits, '_', '-' and '.' are allowed")
+        } else {
+            None
+        };
+        if let Some(reason) = reason {
+            return Err(WriteError::InvalidColumnName {
+                file: file.to_owned(),
+                name: column.name.to_owned(),
+                reason,
+            });
+        }
+        if columns.iter().take(index).any(|c| c.name == column.name) {
+            return Err(WriteError::DuplicateColumn {
+                file: file.to_owned(),
+                name: column.name.to_owned(),
+            });
+        }
+        if column.data.len() != first.data.len() {
+            return Err(WriteError::LengthMismatch {
+                file: file.to_owned(),
+                first: first.name.to_owned(),
+                expected: first.data.len(),
+                column: column.name.to_owned(),
+                len: column.data.len(),
+            });
+        }
+    }
+    Ok(first.data.len())
+}
+
+/// Writes through a temporary file in the destination's directory, renamed over the
+/// destination only once everything is written and synced.
+fn write_atomically(
+    path: &Path,
+    body: impl FnOnce(&mut BufWriter<&File>) -> Result<(), WriteError>,
+) -> Result<(), WriteError> {
+    let file = path.display().to_string();
+    let Some(file_name) = path.file_name() else {
+        return Err(WriteError::NotAFilePath { file });
+    };
+    // The temporary file must be on the same file system for the rename to be atomic.
+    let dir = match path.parent() {
+        Some(parent) if !parent.as_os_str().is_empty() => parent,
+        _ => Path::new("."),
+    };
+    let prefix = format!(".{}.", file_name.to_string_lossy());
+    let mut builder = tempfile::Builder::new();
+    builder.prefix(&prefix).suffix(".tmp");
+    #[cfg(unix)]
+    {
+        // The default 0600 of temporary files would otherwise become the output's mode; 0666
+        // less the umask is what creating the file directly gives.
+        use std::os::unix::fs::PermissionsExt;
+        builder.permissions(std::fs::Permissions::from_mode(0o666));
+    }
+    let temp = builder.tempfile_in(dir).map_err(io_error(&file))?;
+    {
+        let mut out = BufWriter::with_capacity(BUFFER_BYTES, temp.as_file());
+        body(&mut out)?;
+        out.flush().map_err(io_error(&file))?;
+    }
+    temp.as_file().sync_all().map_err(io_error(&file))?;
+    temp.persist(path).map_err(|err| WriteError::Io {
+        file: file.clone(),
+        source: err.error,
+    })?;
+    Ok(())
+}
+
+/// One value from a column.
+#[derive(Clone, Copy, Debug)]
+enum Value {
+    F64(f64),
+    I32(i32),
+}
+
+/// Walks one column row by row, so rows can be written without indexing.
+#[derive(Debug)]
+enum Cursor<'a> {
+    F64(slice::Iter<'a, f64>),
+    I32(slice::Iter<'a, i32>),
+    Component(slice::Iter<'a, [f64; 3]>, Axis),
+}
+
+impl Iterator for Cursor<'_> {
+    type Item = Value;
+
+    fn next(&mut self) -> Option<Value> {
+        match self {
+            Self::F64(iter) => iter.next().map(|&v| Value::F64(v)),
+            Self::I32(iter) => iter.next().map(|&v| Value::I32(v)),
+            Self::Component(iter, axis) => iter.next().map(|v| Value::F64(axis.of(v))),
+        }
+    }
+}
+
+fn write_ply_rows(
+    out: &mut impl Write,
+    file: &str,
+    columns: &[Column<'_>],
+    rows: usize,
+    format: PlyFormat,
+) -> Result<(), WriteError> {
+    let mut header = String::from("ply\n");
+    header.push_str(match format {
+        PlyFormat::BinaryLittleEndian => "format binary_little_endian 1.0\n",
+        PlyFormat::Ascii => "format ascii 1.0\n",
+    });
+    header.push_str("comment written by mls-io\n");
+    // Writing to a String cannot fail.
+    let _ = writeln!(header, "element vertex {rows}");
+    for column in columns {
+        let ty = match column.data {
+            ColumnData::I32(_) => "int",
+            ColumnData::F64(_) | ColumnData::Component { .. } => "double",
+        };
+        let _ = writeln!(header, "property {ty} {}", column.name);
+    }
+    header.push_str("end_header\n");
+    out.write_all(header.as_bytes()).map_err(io_error(file))?;
+    match format {
+        PlyFormat::BinaryLittleEndian => write_binary_rows(out, file, columns, rows),
+        PlyFormat::Ascii => write_text_rows(out, file, columns, rows, ' ', false),
+    }
+}
+
+fn write_binary_rows(
+    out: &mut impl Write,
+    file: &str,
+    columns: &[Column<'_>],
+    rows: usize,
+) -> Result<(), WriteError> {
+    let mut cursors: Vec<Cursor<'_>> = columns.iter().map(|c| c.data.cursor()).collect();
+    let mut row = Vec::with_capacity(8 * columns.len());
+    for _ in 0..rows {
+        row.clear();
+        for value in cursors.iter_mut().filter_map(Iterator::next) {
+            match value {
+                Value::F64(v) => row.extend_from_slice(&v.to_le_bytes()),
+                Value::I32(v) => row.extend_from_slice(&v.to_le_bytes()),
+            }
+        }
+        out.write_all(&row).map_err(io_error(file))?;
+    }
+    Ok(())
+}
+
+/// Writes the rows as text, after a header row of the names if `header` is set.
+fn write_text_rows(
+    out: &mut impl Write,
+    file: &str,
+    columns: &[Column<'_>],
+    rows: usize,
+    separator: char,
+    header: bool,
+) -> Result<(), WriteError> {
+    if header {
+        let names: Vec<&str> = columns.iter().map(|c| c.name).collect();
+        let line = names.join(&separator.to_string()) + "\n";
+        out.write_all(line.as_bytes()).map_err(io_error(file))?;
+    }
+    let mut cursors: Vec<Cursor<'_>> = columns.iter().map(|c| c.data.cursor()).collect();
+    let mut row = String::with_capacity(24 * columns.len());
+    for _ in 0..rows {
+        row.clear();
+        for (index, value) in cursors.iter_mut().filter_map(Iterator::next).enumerate() {
+            if index > 0 {
+                row.push(separator);
+            }
+            // `{:?}` gives the shortest decimal that parses back to the same f64, switching
+            // to exponent form for very large or small magnitudes. Writing to a String cannot
+            // fail.
+            let _ = match value {
+                Value::F64(v) => write!(row, "{v:?}"),
+                Value::I32(v) => write!(row, "{v}"),
+            };
+        }
+        row.push('\n');
+        out.write_all(row.as_bytes()).map_err(io_error(file))?;
+    }
+    Ok(())
+}
