@@ -6,12 +6,18 @@ use mls_core::{MlsConfig, MlsSurface, Parallelism, Point, PointResult, PointStat
 use mls_io::{Axis, Column, PlyFormat};
 
 use crate::pipeline::{self, Timings};
-use crate::{At, CurvatureArgs, EvalArgs, InfoArgs, NormalsArgs, ProjectArgs, interactive, status_code};
+use crate::{
+    At, CurvatureArgs, EvalArgs, InfoArgs, NormalsArgs, ProjectArgs, interactive, status_code,
+};
 
 const NAN3: [f64; 3] = [f64::NAN; 3];
 
 fn ply_format(ascii: bool) -> PlyFormat {
-    if ascii { PlyFormat::Ascii } else { PlyFormat::BinaryLittleEndian }
+    if ascii {
+        PlyFormat::Ascii
+    } else {
+        PlyFormat::BinaryLittleEndian
+    }
 }
 
 /// Vector columns `px py pz` for a prefix `p` (`"n"` gives `nx ny nz`).
@@ -31,25 +37,41 @@ pub fn curvature(a: CurvatureArgs) -> Result<()> {
         let par = Parallelism::Rayon;
         let cloud = t.time("read", || pipeline::read(&a.input))?;
         let points = pipeline::to_points(&cloud);
-        let scale = t.time("spacing", || pipeline::choose_h(&points, s.h, s.h_factor, par, &a.input))?;
-        let normals = t.time("normals", || pipeline::normals(&cloud, &points, s.normals, s.orient, scale.h, par, &a.input))?;
-        let surface = t.time("index", || pipeline::surface(&points, &normals.normals, scale.h, s.cutoff, &a.input))?;
+        let scale = t.time("spacing", || {
+            pipeline::choose_h(&points, s.h, s.h_factor, par, &a.input)
+        })?;
+        let normals = t.time("normals", || {
+            pipeline::normals(&cloud, &points, s.normals, s.orient, scale.h, par, &a.input)
+        })?;
+        let surface = t.time("index", || {
+            pipeline::surface(&points, &normals.normals, scale.h, s.cutoff, &a.input)
+        })?;
         let label = match a.at {
             At::Input => "curvature",
             At::Projected => "projection",
         };
         let results: Vec<PointResult> = t.time(label, || {
-            crate::progress::chunked(points.len(), label, interactive(s.quiet), |range| match a.at {
-                At::Input => surface.curvature_at_points(&points[range], par),
-                At::Projected => surface.project_points(&points[range], par),
+            crate::progress::chunked(points.len(), label, interactive(s.quiet), |range| {
+                match a.at {
+                    At::Input => surface.curvature_at_points(&points[range], par),
+                    At::Projected => surface.project_points(&points[range], par),
+                }
             })
         });
         let n = results.len();
         let mut pos = Vec::with_capacity(n);
         let mut nrm = Vec::with_capacity(n);
-        let (mut k1, mut k2, mut mean, mut gauss) =
-            (Vec::with_capacity(n), Vec::with_capacity(n), Vec::with_capacity(n), Vec::with_capacity(n));
-        let (mut d1, mut d2, mut status) = (Vec::with_capacity(n), Vec::with_capacity(n), Vec::with_capacity(n));
+        let (mut k1, mut k2, mut mean, mut gauss) = (
+            Vec::with_capacity(n),
+            Vec::with_capacity(n),
+            Vec::with_capacity(n),
+            Vec::with_capacity(n),
+        );
+        let (mut d1, mut d2, mut status) = (
+            Vec::with_capacity(n),
+            Vec::with_capacity(n),
+            Vec::with_capacity(n),
+        );
         for (r, p) in results.iter().zip(&cloud.points) {
             status.push(status_code(r));
             match r {
@@ -87,14 +109,23 @@ pub fn curvature(a: CurvatureArgs) -> Result<()> {
         columns.extend(vector_columns(["d1x", "d1y", "d1z"], &d1));
         columns.extend(vector_columns(["d2x", "d2y", "d2z"], &d2));
         columns.push(Column::i32("status", &status));
-        t.time("write", || mls_io::write_point_cloud(&a.out.output, &columns, ply_format(a.out.ascii)))?;
+        t.time("write", || {
+            mls_io::write_point_cloud(&a.out.output, &columns, ply_format(a.out.ascii))
+        })?;
         if !s.quiet {
             eprintln!("mlscurv curvature: {}", a.input.display());
             eprintln!("  points read     {}", points.len());
             eprintln!("  h               {:.6} = {}", scale.h, scale.why);
             eprintln!("  cutoff          {}", cutoff_text(s.cutoff));
             eprintln!("  normals         {}", normals.source);
-            eprintln!("  evaluated at    {}", if a.at == At::Input { "input points" } else { "projected points" });
+            eprintln!(
+                "  evaluated at    {}",
+                if a.at == At::Input {
+                    "input points"
+                } else {
+                    "projected points"
+                }
+            );
             eprintln!("  status          {}", pipeline::status_counts(&status));
             eprintln!("  k1              {}", pipeline::percentiles(&k1));
             eprintln!("  k2              {}", pipeline::percentiles(&k2));
@@ -116,30 +147,56 @@ fn cutoff_text(c: mls_core::Cutoff) -> String {
 
 fn print_timings(t: &Timings, n: usize) {
     let total: f64 = t.0.iter().map(|(_, s)| s).sum();
-    let stages: Vec<String> = t.0.iter().map(|(name, s)| format!("{name} {s:.3}")).collect();
-    eprintln!("  time (s)        {}; total {total:.3} ({:.0} points/s)", stages.join(", "), n as f64 / total.max(1e-9));
+    let stages: Vec<String> =
+        t.0.iter()
+            .map(|(name, s)| format!("{name} {s:.3}"))
+            .collect();
+    eprintln!(
+        "  time (s)        {}; total {total:.3} ({:.0} points/s)",
+        stages.join(", "),
+        n as f64 / total.max(1e-9)
+    );
 }
 
 pub fn eval(a: EvalArgs) -> Result<()> {
     let cloud = pipeline::read(&a.cloud)?;
     let Some(file_normals) = &cloud.normals else {
-        anyhow::bail!("{}: the cloud has no normals (nx, ny, nz); eval needs an oriented cloud", a.cloud.display());
+        anyhow::bail!(
+            "{}: the cloud has no normals (nx, ny, nz); eval needs an oriented cloud",
+            a.cloud.display()
+        );
     };
     let queries = mls_io::read_point_cloud(&a.queries)?;
     let points = pipeline::to_points(&cloud);
     let par = Parallelism::Rayon;
     let h = match a.h {
         Some(h) => h,
-        None => pipeline::choose_h(&points, None, mls_core::normals::DEFAULT_H_FACTOR, par, &a.cloud)?.h,
+        None => {
+            pipeline::choose_h(
+                &points,
+                None,
+                mls_core::normals::DEFAULT_H_FACTOR,
+                par,
+                &a.cloud,
+            )?
+            .h
+        }
     };
     let normals: Vec<Vector> = file_normals.iter().map(|n| Vector::from(*n)).collect();
-    let surface = MlsSurface::new(&points, &normals, MlsConfig { cutoff: a.cutoff, ..MlsConfig::new(h) })
-        .with_context(|| format!("{}", a.cloud.display()))?;
+    let surface = MlsSurface::new(
+        &points,
+        &normals,
+        MlsConfig {
+            cutoff: a.cutoff,
+            ..MlsConfig::new(h)
+        },
+    )
+    .with_context(|| format!("{}", a.cloud.display()))?;
     let q: Vec<Point> = queries.points.iter().map(|p| Point::from(*p)).collect();
     let results = surface.curvature_at_points(&q, par);
     const NAMES: [&str; 21] = [
-        "x", "y", "z", "g", "gx", "gy", "gz", "hxx", "hxy", "hxz", "hyy", "hyz", "hzz", "nx", "ny", "nz", "k1", "k2", "mean",
-        "gauss", "status",
+        "x", "y", "z", "g", "gx", "gy", "gz", "hxx", "hxy", "hxz", "hyy", "hyz", "hzz", "nx", "ny",
+        "nz", "k1", "k2", "mean", "gauss", "status",
     ];
     let mut cols: Vec<Vec<f64>> = vec![Vec::with_capacity(q.len()); 20];
     let mut status = Vec::with_capacity(q.len());
@@ -149,11 +206,34 @@ pub fn eval(a: EvalArgs) -> Result<()> {
             Ok(sp) => {
                 // Undo the underflow shift: these are the true g, ∇g and H (0 where they underflow).
                 let s = (-sp.implicit.log_scale).exp();
-                let (g, gr, hs, c) = (sp.implicit.value * s, sp.implicit.gradient * s, sp.implicit.hessian * s, sp.curvature);
+                let (g, gr, hs, c) = (
+                    sp.implicit.value * s,
+                    sp.implicit.gradient * s,
+                    sp.implicit.hessian * s,
+                    sp.curvature,
+                );
                 let n = sp.implicit.field.normal;
                 [
-                    p.x, p.y, p.z, g, gr.x, gr.y, gr.z, hs[(0, 0)], hs[(0, 1)], hs[(0, 2)], hs[(1, 1)], hs[(1, 2)],
-                    hs[(2, 2)], n.x, n.y, n.z, c.k1, c.k2, c.mean, c.gauss,
+                    p.x,
+                    p.y,
+                    p.z,
+                    g,
+                    gr.x,
+                    gr.y,
+                    gr.z,
+                    hs[(0, 0)],
+                    hs[(0, 1)],
+                    hs[(0, 2)],
+                    hs[(1, 1)],
+                    hs[(1, 2)],
+                    hs[(2, 2)],
+                    n.x,
+                    n.y,
+                    n.z,
+                    c.k1,
+                    c.k2,
+                    c.mean,
+                    c.gauss,
                 ]
             }
             Err(_) => {
@@ -166,7 +246,11 @@ pub fn eval(a: EvalArgs) -> Result<()> {
             c.push(v);
         }
     }
-    let mut columns: Vec<Column<'_>> = NAMES[..20].iter().zip(&cols).map(|(name, c)| Column::f64(name, c)).collect();
+    let mut columns: Vec<Column<'_>> = NAMES[..20]
+        .iter()
+        .zip(&cols)
+        .map(|(name, c)| Column::f64(name, c))
+        .collect();
     columns.push(Column::i32("status", &status));
     match &a.output {
         Some(path) => {
@@ -186,15 +270,35 @@ pub fn normals(a: NormalsArgs) -> Result<()> {
         let par = Parallelism::Rayon;
         let cloud = t.time("read", || pipeline::read(&a.input))?;
         let points = pipeline::to_points(&cloud);
-        let scale = t.time("spacing", || pipeline::choose_h(&points, a.h, a.h_factor, par, &a.input))?;
-        let est = t.time("normals", || {
-            pipeline::normals(&cloud, &points, crate::NormalsMode::Estimate, a.orient, scale.h, par, &a.input)
+        let scale = t.time("spacing", || {
+            pipeline::choose_h(&points, a.h, a.h_factor, par, &a.input)
         })?;
-        let nrm: Vec<[f64; 3]> = est.normals.iter().map(|n| n.map_or([0.0; 3], Into::into)).collect();
+        let est = t.time("normals", || {
+            pipeline::normals(
+                &cloud,
+                &points,
+                crate::NormalsMode::Estimate,
+                a.orient,
+                scale.h,
+                par,
+                &a.input,
+            )
+        })?;
+        let nrm: Vec<[f64; 3]> = est
+            .normals
+            .iter()
+            .map(|n| n.map_or([0.0; 3], Into::into))
+            .collect();
         let status: Vec<i32> = est
             .normals
             .iter()
-            .map(|n| if n.is_some() { 0 } else { i32::from(PointStatus::NormalEstimationFailed.code()) })
+            .map(|n| {
+                if n.is_some() {
+                    0
+                } else {
+                    i32::from(PointStatus::NormalEstimationFailed.code())
+                }
+            })
             .collect();
         let mut columns = Vec::new();
         columns.extend(vector_columns(["x", "y", "z"], &cloud.points));
@@ -203,13 +307,18 @@ pub fn normals(a: NormalsArgs) -> Result<()> {
         if mls_io::FileFormat::from_path(&a.out.output) != Some(mls_io::FileFormat::Xyz) {
             columns.push(Column::i32("status", &status));
         }
-        t.time("write", || mls_io::write_point_cloud(&a.out.output, &columns, ply_format(a.out.ascii)))?;
+        t.time("write", || {
+            mls_io::write_point_cloud(&a.out.output, &columns, ply_format(a.out.ascii))
+        })?;
         if !a.quiet {
             eprintln!("mlscurv normals: {}", a.input.display());
             eprintln!("  points read     {}", points.len());
             eprintln!("  h               {:.6} = {}", scale.h, scale.why);
             eprintln!("  normals         {}", est.source);
-            eprintln!("  status          {} (failed normals are written as 0 0 0)", pipeline::status_counts(&status));
+            eprintln!(
+                "  status          {} (failed normals are written as 0 0 0)",
+                pipeline::status_counts(&status)
+            );
             print_timings(&t, points.len());
             eprintln!("  wrote           {}", a.out.output.display());
         }
@@ -225,9 +334,15 @@ pub fn project(a: ProjectArgs) -> Result<()> {
         let par = Parallelism::Rayon;
         let cloud = t.time("read", || pipeline::read(&a.input))?;
         let points = pipeline::to_points(&cloud);
-        let scale = t.time("spacing", || pipeline::choose_h(&points, s.h, s.h_factor, par, &a.input))?;
-        let normals = t.time("normals", || pipeline::normals(&cloud, &points, s.normals, s.orient, scale.h, par, &a.input))?;
-        let surface = t.time("index", || pipeline::surface(&points, &normals.normals, scale.h, s.cutoff, &a.input))?;
+        let scale = t.time("spacing", || {
+            pipeline::choose_h(&points, s.h, s.h_factor, par, &a.input)
+        })?;
+        let normals = t.time("normals", || {
+            pipeline::normals(&cloud, &points, s.normals, s.orient, scale.h, par, &a.input)
+        })?;
+        let surface = t.time("index", || {
+            pipeline::surface(&points, &normals.normals, scale.h, s.cutoff, &a.input)
+        })?;
         let results = t.time("projection", || {
             crate::progress::chunked(points.len(), "projection", interactive(s.quiet), |r| {
                 surface.project_points(&points[r], par)
@@ -253,10 +368,17 @@ pub fn project(a: ProjectArgs) -> Result<()> {
         columns.extend(vector_columns(["x", "y", "z"], &pos));
         columns.extend(vector_columns(["nx", "ny", "nz"], &nrm));
         columns.push(Column::i32("status", &status));
-        t.time("write", || mls_io::write_point_cloud(&a.out.output, &columns, ply_format(a.out.ascii)))?;
+        t.time("write", || {
+            mls_io::write_point_cloud(&a.out.output, &columns, ply_format(a.out.ascii))
+        })?;
         if !s.quiet {
-            let moved: Vec<f64> =
-                pos.iter().zip(&cloud.points).zip(&status).filter(|(_, s)| **s == 0).map(|((a, b), _)| dist(a, b)).collect();
+            let moved: Vec<f64> = pos
+                .iter()
+                .zip(&cloud.points)
+                .zip(&status)
+                .filter(|(_, s)| **s == 0)
+                .map(|((a, b), _)| dist(a, b))
+                .collect();
             eprintln!("mlscurv project: {}", a.input.display());
             eprintln!("  points read     {}", points.len());
             eprintln!("  h               {:.6} = {}", scale.h, scale.why);
@@ -282,11 +404,27 @@ pub fn info(a: InfoArgs) -> Result<()> {
     if points.is_empty() {
         return Ok(());
     }
-    let (lo, hi) = points.iter().fold((points[0].coords, points[0].coords), |(lo, hi), p| (lo.inf(&p.coords), hi.sup(&p.coords)));
-    println!("bounding box    [{:.6}, {:.6}, {:.6}] .. [{:.6}, {:.6}, {:.6}]", lo.x, lo.y, lo.z, hi.x, hi.y, hi.z);
+    let (lo, hi) = points
+        .iter()
+        .fold((points[0].coords, points[0].coords), |(lo, hi), p| {
+            (lo.inf(&p.coords), hi.sup(&p.coords))
+        });
+    println!(
+        "bounding box    [{:.6}, {:.6}, {:.6}] .. [{:.6}, {:.6}, {:.6}]",
+        lo.x, lo.y, lo.z, hi.x, hi.y, hi.z
+    );
     let size = hi - lo;
-    println!("size            {:.6} × {:.6} × {:.6}", size.x, size.y, size.z);
-    match pipeline::choose_h(&points, None, mls_core::normals::DEFAULT_H_FACTOR, Parallelism::Rayon, &a.input) {
+    println!(
+        "size            {:.6} × {:.6} × {:.6}",
+        size.x, size.y, size.z
+    );
+    match pipeline::choose_h(
+        &points,
+        None,
+        mls_core::normals::DEFAULT_H_FACTOR,
+        Parallelism::Rayon,
+        &a.input,
+    ) {
         Ok(scale) => {
             if let Some(s) = scale.spacing {
                 println!(
@@ -303,11 +441,17 @@ pub fn info(a: InfoArgs) -> Result<()> {
         None => println!("normals         absent (curvature will estimate and orient them)"),
         Some(n) => {
             let normals: Vec<Vector> = n.iter().map(|n| Vector::from(*n)).collect();
-            let zero = normals.iter().filter(|n| mls_core::UnitNormal::new(**n).is_err()).count();
+            let zero = normals
+                .iter()
+                .filter(|n| mls_core::UnitNormal::new(**n).is_err())
+                .count();
             let graph = NeighbourGraph::build(&points, DEFAULT_NEIGHBOURS, Parallelism::Rayon)?;
             let consistency = orientation_consistency(&graph, &normals, Parallelism::Rayon)?;
             let verdict = match consistency {
-                Some(c) if c >= 0.99 => format!("consistently oriented ({:.2}% of neighbour pairs agree)", 100.0 * c),
+                Some(c) if c >= 0.99 => format!(
+                    "consistently oriented ({:.2}% of neighbour pairs agree)",
+                    100.0 * c
+                ),
                 Some(c) => format!(
                     "NOT consistently oriented: {:.2}% of neighbour pairs agree (use --normals estimate)",
                     100.0 * c

@@ -13,7 +13,11 @@ mod pipeline;
 mod progress;
 
 #[derive(Debug, Parser)]
-#[command(name = "mlscurv", version, about = "Exact curvature of point clouds on the MLS surface (Yang & Qian 2007)")]
+#[command(
+    name = "mlscurv",
+    version,
+    about = "Exact curvature of point clouds on the MLS surface (Yang & Qian 2007)"
+)]
 #[command(after_help = STATUS_HELP)]
 struct Cli {
     #[command(subcommand)]
@@ -38,6 +42,7 @@ Sign convention: curvature is positive where the surface bends away from the ori
 #[derive(Debug, Subcommand)]
 enum Command {
     /// Principal curvatures, directions, mean and Gaussian curvature at every point.
+    #[command(after_help = STATUS_HELP)]
     Curvature(CurvatureArgs),
     /// The raw implicit function g, its gradient and Hessian at arbitrary query points.
     Eval(EvalArgs),
@@ -178,8 +183,15 @@ struct InfoArgs {
 }
 
 fn positive_finite(s: &str) -> Result<f64, String> {
-    let v: f64 = s.trim().parse().map_err(|_| format!("`{s}` is not a number"))?;
-    if v.is_finite() && v > 0.0 { Ok(v) } else { Err(format!("must be finite and positive, got {s}")) }
+    let v: f64 = s
+        .trim()
+        .parse()
+        .map_err(|_| format!("`{s}` is not a number"))?;
+    if v.is_finite() && v > 0.0 {
+        Ok(v)
+    } else {
+        Err(format!("must be finite and positive, got {s}"))
+    }
 }
 
 fn parse_cutoff(s: &str) -> Result<mls_core::Cutoff, String> {
@@ -188,7 +200,10 @@ fn parse_cutoff(s: &str) -> Result<mls_core::Cutoff, String> {
     }
     let c = positive_finite(s)?;
     if c < mls_core::Cutoff::MIN_FACTOR {
-        return Err(format!("must be at least {} (in units of h) or `none`, got {s}", mls_core::Cutoff::MIN_FACTOR));
+        return Err(format!(
+            "must be at least {} (in units of h) or `none`, got {s}",
+            mls_core::Cutoff::MIN_FACTOR
+        ));
     }
     Ok(mls_core::Cutoff::Radius(c))
 }
@@ -200,13 +215,17 @@ fn parse_orient(s: &str) -> Result<mls_core::normals::Orientation, String> {
         "none" => Ok(Orientation::None),
         _ => {
             let Some(rest) = s.strip_prefix("viewpoint:") else {
-                return Err(format!("expected `mst`, `none` or `viewpoint:X,Y,Z`, got `{s}`"));
+                return Err(format!(
+                    "expected `mst`, `none` or `viewpoint:X,Y,Z`, got `{s}`"
+                ));
             };
             let v: Vec<f64> = rest
                 .split(',')
                 .map(|c| c.trim().parse::<f64>().ok().filter(|v| v.is_finite()))
                 .collect::<Option<_>>()
-                .ok_or_else(|| format!("viewpoint needs three finite numbers X,Y,Z, got `{rest}`"))?;
+                .ok_or_else(|| {
+                    format!("viewpoint needs three finite numbers X,Y,Z, got `{rest}`")
+                })?;
             let [x, y, z] = v[..] else {
                 return Err(format!("viewpoint needs three numbers X,Y,Z, got `{rest}`"));
             };

@@ -5,8 +5,8 @@ use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
 use mls_core::normals::{
-    DEFAULT_NEIGHBOURS, DEFAULT_SPACING_NEIGHBOURS, NormalsConfig, Orientation, SpacingStats, estimate_normals,
-    spacing_statistics, suggest_h,
+    DEFAULT_NEIGHBOURS, DEFAULT_SPACING_NEIGHBOURS, NormalsConfig, Orientation, SpacingStats,
+    estimate_normals, spacing_statistics, suggest_h,
 };
 use mls_core::{Cutoff, MlsConfig, MlsSurface, Parallelism, Point, PointStatus, Vector};
 use mls_io::PointCloud;
@@ -34,7 +34,11 @@ impl Timings {
 pub fn read(path: &Path) -> Result<PointCloud> {
     let cloud = mls_io::read_point_cloud(path)?;
     if cloud.points.len() < MIN_POINTS {
-        bail!("{}: {} point(s); at least {MIN_POINTS} are needed to build a neighbourhood", path.display(), cloud.points.len());
+        bail!(
+            "{}: {} point(s); at least {MIN_POINTS} are needed to build a neighbourhood",
+            path.display(),
+            cloud.points.len()
+        );
     }
     Ok(cloud)
 }
@@ -42,7 +46,10 @@ pub fn read(path: &Path) -> Result<PointCloud> {
 /// Refuses to overwrite the input with the output.
 pub fn check_output(input: &Path, output: &Path) -> Result<()> {
     if mls_io::same_file(input, output) {
-        bail!("{}: output path is the input file; refusing to overwrite it", output.display());
+        bail!(
+            "{}: output path is the input file; refusing to overwrite it",
+            output.display()
+        );
     }
     Ok(())
 }
@@ -58,13 +65,24 @@ pub struct Scale {
     pub spacing: Option<SpacingStats>,
 }
 
-pub fn choose_h(points: &[Point], h: Option<f64>, factor: f64, par: Parallelism, file: &Path) -> Result<Scale> {
+pub fn choose_h(
+    points: &[Point],
+    h: Option<f64>,
+    factor: f64,
+    par: Parallelism,
+    file: &Path,
+) -> Result<Scale> {
     if let Some(h) = h {
-        return Ok(Scale { h, why: "given with --h".into(), spacing: None });
+        return Ok(Scale {
+            h,
+            why: "given with --h".into(),
+            spacing: None,
+        });
     }
     let stats = spacing_statistics(points, DEFAULT_SPACING_NEIGHBOURS, par)
         .with_context(|| format!("{}: cannot measure the point spacing", file.display()))?;
-    let h = suggest_h(&stats, factor).with_context(|| format!("{}: cannot derive h from the spacing", file.display()))?;
+    let h = suggest_h(&stats, factor)
+        .with_context(|| format!("{}: cannot derive h from the spacing", file.display()))?;
     Ok(Scale {
         h,
         why: format!(
@@ -92,7 +110,10 @@ pub fn normals(
 ) -> Result<Normals> {
     let from_file = match (mode, &cloud.normals) {
         (NormalsMode::File, None) => {
-            bail!("{}: --normals file given but the file has no normals (nx, ny, nz)", file.display())
+            bail!(
+                "{}: --normals file given but the file has no normals (nx, ny, nz)",
+                file.display()
+            )
         }
         (NormalsMode::File | NormalsMode::Auto, Some(n)) => Some(n),
         _ => None,
@@ -100,7 +121,11 @@ pub fn normals(
     if let Some(file_normals) = from_file {
         let normals: Vec<Option<Vector>> = file_normals
             .iter()
-            .map(|n| mls_core::UnitNormal::new(Vector::from(*n)).ok().map(|u| u.into_inner()))
+            .map(|n| {
+                mls_core::UnitNormal::new(Vector::from(*n))
+                    .ok()
+                    .map(|u| u.into_inner())
+            })
             .collect();
         let bad = normals.iter().filter(|n| n.is_none()).count();
         let source = if bad == 0 {
@@ -110,35 +135,74 @@ pub fn normals(
         };
         return Ok(Normals { normals, source });
     }
-    let config = NormalsConfig { k: DEFAULT_NEIGHBOURS, h: Some(h), orientation, ..NormalsConfig::default() };
-    let est = estimate_normals(points, &config, par).with_context(|| format!("{}: normal estimation", file.display()))?;
+    let config = NormalsConfig {
+        k: DEFAULT_NEIGHBOURS,
+        h: Some(h),
+        orientation,
+        ..NormalsConfig::default()
+    };
+    let est = estimate_normals(points, &config, par)
+        .with_context(|| format!("{}: normal estimation", file.display()))?;
     let orient = match orientation {
         Orientation::Outward => "oriented outward by minimum spanning tree".to_string(),
-        Orientation::Viewpoint(v) => format!("oriented towards the viewpoint ({}, {}, {})", v.x, v.y, v.z),
+        Orientation::Viewpoint(v) => {
+            format!("oriented towards the viewpoint ({}, {}, {})", v.x, v.y, v.z)
+        }
         Orientation::None => "not oriented (--orient none)".to_string(),
     };
-    let consistency = est.report.consistency.map(|c| format!(", {:.2}% of neighbour pairs agree", 100.0 * c)).unwrap_or_default();
+    let consistency = est
+        .report
+        .consistency
+        .map(|c| format!(", {:.2}% of neighbour pairs agree", 100.0 * c))
+        .unwrap_or_default();
     let source = format!(
         "estimated (weighted covariance, {} neighbours), {orient}: {} component(s){consistency}; {} failed",
         DEFAULT_NEIGHBOURS,
         est.report.components,
         est.failed()
     );
-    Ok(Normals { normals: est.normals().into_iter().map(Result::ok).collect(), source })
+    Ok(Normals {
+        normals: est.normals().into_iter().map(Result::ok).collect(),
+        source,
+    })
 }
 
 /// Builds the surface from the points that have normals.
-pub fn surface(points: &[Point], normals: &[Option<Vector>], h: f64, cutoff: Cutoff, file: &Path) -> Result<MlsSurface> {
-    let (p, n): (Vec<Point>, Vec<Vector>) =
-        points.iter().zip(normals).filter_map(|(p, n)| n.map(|n| (*p, n))).unzip();
+pub fn surface(
+    points: &[Point],
+    normals: &[Option<Vector>],
+    h: f64,
+    cutoff: Cutoff,
+    file: &Path,
+) -> Result<MlsSurface> {
+    let (p, n): (Vec<Point>, Vec<Vector>) = points
+        .iter()
+        .zip(normals)
+        .filter_map(|(p, n)| n.map(|n| (*p, n)))
+        .unzip();
     if p.len() < MIN_POINTS {
-        bail!("{}: only {} point(s) have a normal; at least {MIN_POINTS} are needed", file.display(), p.len());
+        bail!(
+            "{}: only {} point(s) have a normal; at least {MIN_POINTS} are needed",
+            file.display(),
+            p.len()
+        );
     }
-    MlsSurface::new(&p, &n, MlsConfig { cutoff, ..MlsConfig::new(h) }).with_context(|| format!("{}", file.display()))
+    MlsSurface::new(
+        &p,
+        &n,
+        MlsConfig {
+            cutoff,
+            ..MlsConfig::new(h)
+        },
+    )
+    .with_context(|| format!("{}", file.display()))
 }
 
 /// Runs `f` on a rayon pool with the requested number of threads (all cores by default).
-pub fn with_threads<T: Send>(threads: Option<u16>, f: impl FnOnce() -> Result<T> + Send) -> Result<T> {
+pub fn with_threads<T: Send>(
+    threads: Option<u16>,
+    f: impl FnOnce() -> Result<T> + Send,
+) -> Result<T> {
     match threads {
         None => f(),
         Some(n) => rayon::ThreadPoolBuilder::new()

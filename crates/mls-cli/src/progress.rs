@@ -8,10 +8,17 @@ use indicatif::{ProgressBar, ProgressStyle};
 const CHUNK: usize = 1 << 16;
 
 /// Runs `f` over `0..n` in chunks, in order, drawing a bar on stderr when `show` is set.
-pub fn chunked<T>(n: usize, label: &str, show: bool, mut f: impl FnMut(Range<usize>) -> Vec<T>) -> Vec<T> {
+pub fn chunked<T>(
+    n: usize,
+    label: &str,
+    show: bool,
+    mut f: impl FnMut(Range<usize>) -> Vec<T>,
+) -> Vec<T> {
     let bar = if show && n > CHUNK {
         let bar = ProgressBar::new(n as u64).with_message(label.to_string());
-        if let Ok(style) = ProgressStyle::with_template("{msg:>12} [{bar:40}] {pos}/{len} ({eta} left)") {
+        if let Ok(style) =
+            ProgressStyle::with_template("{msg:>12} [{bar:40}] {pos}/{len} ({eta} left)")
+        {
             bar.set_style(style.progress_chars("=> "));
         }
         Some(bar)
