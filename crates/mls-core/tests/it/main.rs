@@ -2,5 +2,6 @@
 
 mod clouds;
 mod invariance;
+mod normals;
 mod projection;
 mod surface;
