@@ -11,7 +11,7 @@ mod validate_shapes;
 
 const TASKS: &str = "\
 Tasks:
-  validate [--quick] [--seed N] [--evals N] [--differential-only]
+  validate [--quick] [--seed N] [--evals N] [--replay SEED] [--differential-only]
                  Closed form against hyper-dual AD on seeded random clouds, and analytic shapes.
                  Writes target/validate/report.md. --quick: a small run for CI.
   faults         Applies each known misreading of the paper to a copy of mls-core and checks

@@ -23,6 +23,8 @@ pub(crate) struct Options {
     pub seed: u64,
     pub evals: Option<usize>,
     pub differential_only: bool,
+    /// Run only the case with this seed (as printed in the report).
+    pub replay: Option<u64>,
 }
 
 impl Default for Options {
@@ -32,6 +34,7 @@ impl Default for Options {
             seed: DEFAULT_SEED,
             evals: None,
             differential_only: false,
+            replay: None,
         }
     }
 }
@@ -46,6 +49,7 @@ impl Options {
                 "--differential-only" => o.differential_only = true,
                 "--seed" => o.seed = parse_u64(it.next())?,
                 "--evals" => o.evals = Some(parse_u64(it.next())? as usize),
+                "--replay" => o.replay = Some(parse_u64(it.next())?),
                 other => bail!("validate: unknown option `{other}`"),
             }
         }
@@ -130,12 +134,15 @@ pub(crate) fn run(o: &Options) -> Result<()> {
         o.seed
     )?;
 
-    let tally = differential(o.seed, target);
+    let tally = match o.replay {
+        Some(seed) => one_case(seed, QUERIES_PER_CASE),
+        None => differential(o.seed, target),
+    };
     let elapsed = start.elapsed().as_secs_f64();
     writeln!(
         report,
         "## Closed form against hyper-dual AD\n\n{} evaluations ({} skipped where n or ∇g is undefined) on {} cores in {elapsed:.1} s. \
-         Threshold {THRESHOLD:e}. Replay the worst case with `cargo xtask validate --seed <seed> --evals 1`.\n",
+         Threshold {THRESHOLD:e}. Replay a case with `cargo xtask validate --replay <seed>`.\n",
         tally.evals,
         tally.skipped,
         rayon::current_num_threads()
@@ -184,20 +191,15 @@ that makes a direction meaningful only as far as the eigengap allows; Eq. 5 agai
 
 /// Runs cases until `target` evaluations, in parallel, each case seeded from the base seed.
 fn differential(base_seed: u64, target: usize) -> Tally {
-    const QUERIES_PER_CASE: usize = 24;
     let cases = target.div_ceil(QUERIES_PER_CASE).max(1);
     (0..cases)
         .into_par_iter()
-        .map(|c| {
-            let seed = if cases == 1 && target == 1 {
-                base_seed
-            } else {
-                case_seed(base_seed, c as u64)
-            };
-            one_case(seed, QUERIES_PER_CASE.min(target))
-        })
+        .map(|c| one_case(case_seed(base_seed, c as u64), QUERIES_PER_CASE))
         .reduce(Tally::default, Tally::merge)
 }
+
+/// Query points per random cloud.
+const QUERIES_PER_CASE: usize = 24;
 
 fn case_seed(base: u64, case: u64) -> u64 {
     // SplitMix64 step: distinct, well-mixed seeds per case.

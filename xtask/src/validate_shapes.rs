@@ -146,6 +146,9 @@ pub(crate) struct Analytic {
     pub failures: Vec<String>,
 }
 
+/// The nominal surface point nearest to a projected point, given the sample it came from.
+type FootPoint = Box<dyn Fn(&Point, &SurfacePoint) -> SurfacePoint + Sync>;
+
 struct Shape {
     name: &'static str,
     setup: String,
@@ -154,7 +157,7 @@ struct Shape {
     queries: Vec<usize>,
     h: f64,
     /// Nominal curvature at the foot point of a projected point.
-    closest: Box<dyn Fn(&Point, &SurfacePoint) -> SurfacePoint + Sync>,
+    closest: FootPoint,
     /// Tolerances on |mean| and standard deviation of the k1 and k2 errors at the input points,
     /// and on the largest direction error (radians, where |k1 − k2| ≥ 10% of max |k|). About
     /// three times the values measured by the full run, rounded up: regression guards. The

@@ -198,7 +198,7 @@ pub fn eval(a: EvalArgs) -> Result<()> {
         "x", "y", "z", "g", "gx", "gy", "gz", "hxx", "hxy", "hxz", "hyy", "hyz", "hzz", "nx", "ny",
         "nz", "k1", "k2", "mean", "gauss", "status",
     ];
-    let mut cols: Vec<Vec<f64>> = vec![Vec::with_capacity(q.len()); 20];
+    let mut cols: Vec<Vec<f64>> = (0..20).map(|_| Vec::with_capacity(q.len())).collect();
     let mut status = Vec::with_capacity(q.len());
     for (r, p) in results.iter().zip(&q) {
         status.push(status_code(r));

@@ -35,7 +35,7 @@ pub struct Curvature {
 /// The Gaussian curvature is Eq. 6's bordered determinant, `∇gᵀ adj(H) ∇g / |∇g|⁴`.
 pub fn curvature(gradient: &Vector, hessian: &Matrix) -> Option<Curvature> {
     let len = gradient.norm();
-    if !(len > 0.0 && len.is_finite()) || !hessian.iter().all(|v| v.is_finite()) {
+    if !(len > 0.0 && len.is_finite() && hessian.iter().all(|v| v.is_finite())) {
         return None;
     }
     let normal = gradient / len;

@@ -44,10 +44,10 @@ impl Kernel {
         if !(h.is_finite() && h > 0.0) {
             return Err(ConfigError::InvalidScale(h));
         }
-        if let Cutoff::Radius(c) = cutoff {
-            if !(c.is_finite() && c >= Cutoff::MIN_FACTOR) {
-                return Err(ConfigError::InvalidCutoff(c));
-            }
+        if let Cutoff::Radius(c) = cutoff
+            && !(c.is_finite() && c >= Cutoff::MIN_FACTOR)
+        {
+            return Err(ConfigError::InvalidCutoff(c));
         }
         let inv_h2 = 1.0 / (h * h);
         if !inv_h2.is_finite() {

@@ -36,3 +36,8 @@ pub use normals::{
 pub use projection::ProjectionConfig;
 pub use status::PointStatus;
 pub use surface::{Evaluator, MlsConfig, MlsSurface, Parallelism, PointResult, SurfacePoint};
+
+/// The README's Rust example, compiled and run as a doctest so that it cannot drift.
+#[doc = include_str!("../../../README.md")]
+#[cfg(doctest)]
+pub struct ReadmeDoctests;
