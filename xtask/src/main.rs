@@ -5,6 +5,7 @@ use std::process::Command;
 
 use anyhow::{Context, Result, bail};
 
+mod defaults;
 mod faults;
 mod validate;
 mod validate_shapes;
@@ -16,6 +17,7 @@ Tasks:
                  Writes target/validate/report.md. --quick: a small run for CI.
   faults         Applies each known misreading of the paper to a copy of mls-core and checks
                  that `validate --quick` catches it. Writes target/validate/faults.md.
+  defaults       The measurements behind mlscurv's defaults (--h-factor, --at); writes docs/defaults.md.
   ci             fmt --check, clippy -D warnings, tests, validate --quick.";
 
 fn main() -> Result<()> {
@@ -29,6 +31,7 @@ fn main() -> Result<()> {
     match task.as_str() {
         "validate" => validate::run(&validate::Options::parse(rest)?),
         "faults" => faults::run(),
+        "defaults" => defaults::run(),
         "ci" => ci(),
         other => bail!("unknown task `{other}`\n{TASKS}"),
     }

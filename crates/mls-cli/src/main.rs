@@ -78,13 +78,13 @@ enum At {
 #[derive(Debug, Args)]
 struct SurfaceArgs {
     /// Gaussian scale h, in the units of the file. Default: --h-factor × the point spacing.
-    #[arg(long, value_parser = positive_finite, conflicts_with = "h_factor")]
+    #[arg(long, value_parser = positive_finite, conflicts_with = "h_factor", allow_negative_numbers = true)]
     h: Option<f64>,
     /// h as a multiple of the median local point spacing.
-    #[arg(long, value_parser = positive_finite, default_value_t = mls_core::normals::DEFAULT_H_FACTOR)]
+    #[arg(long, value_parser = positive_finite, default_value_t = mls_core::normals::DEFAULT_H_FACTOR, allow_negative_numbers = true)]
     h_factor: f64,
     /// Kernel cutoff radius in units of h (at least 2), or `none` for the untruncated kernel.
-    #[arg(long, value_parser = parse_cutoff, default_value = "5")]
+    #[arg(long, value_parser = parse_cutoff, default_value = "5", allow_negative_numbers = true)]
     cutoff: mls_core::Cutoff,
     /// Where normals come from.
     #[arg(long, value_enum, default_value_t = NormalsMode::Auto)]
@@ -133,10 +133,10 @@ struct EvalArgs {
     #[arg(long = "at")]
     queries: PathBuf,
     /// Gaussian scale h. Default: 2 × the point spacing of the cloud.
-    #[arg(long, value_parser = positive_finite)]
+    #[arg(long, value_parser = positive_finite, allow_negative_numbers = true)]
     h: Option<f64>,
     /// Kernel cutoff radius in units of h, or `none`.
-    #[arg(long, value_parser = parse_cutoff, default_value = "5")]
+    #[arg(long, value_parser = parse_cutoff, default_value = "5", allow_negative_numbers = true)]
     cutoff: mls_core::Cutoff,
     /// Output CSV; standard output when absent.
     #[arg(short, long)]
@@ -150,10 +150,10 @@ struct NormalsArgs {
     #[command(flatten)]
     out: OutputArgs,
     /// Scale h of the covariance weights. Default: --h-factor × the point spacing.
-    #[arg(long, value_parser = positive_finite, conflicts_with = "h_factor")]
+    #[arg(long, value_parser = positive_finite, conflicts_with = "h_factor", allow_negative_numbers = true)]
     h: Option<f64>,
     /// h as a multiple of the median local point spacing.
-    #[arg(long, value_parser = positive_finite, default_value_t = mls_core::normals::DEFAULT_H_FACTOR)]
+    #[arg(long, value_parser = positive_finite, default_value_t = mls_core::normals::DEFAULT_H_FACTOR, allow_negative_numbers = true)]
     h_factor: f64,
     /// Orientation: `mst`, `viewpoint:X,Y,Z`, or `none`.
     #[arg(long, value_parser = parse_orient, default_value = "mst")]

@@ -14,12 +14,13 @@ use std::io;
 #[derive(Debug, thiserror::Error)]
 pub enum ReadError {
     /// The file could not be opened, or reading from it failed.
-    #[error("{file}: {source}")]
+    #[error("{file}: {error}")]
     Io {
         /// The file.
         file: String,
-        /// The operating-system error.
-        source: io::Error,
+        /// The operating-system error. Not a `source`: the message already states it, and
+        /// error reporters that print the chain would repeat it.
+        error: io::Error,
     },
     /// The file name has no extension, so its format is unknown.
     #[error("{file}: no file extension; expected .ply, .xyz, .txt, .pts or .csv")]
@@ -137,12 +138,13 @@ pub enum ReadError {
 pub enum WriteError {
     /// Creating the temporary file, writing, syncing it or renaming it over the destination
     /// failed (for example, the directory does not exist or is not writable).
-    #[error("{file}: {source}")]
+    #[error("{file}: {error}")]
     Io {
         /// The destination.
         file: String,
-        /// The operating-system error.
-        source: io::Error,
+        /// The operating-system error. Not a `source`: the message already states it, and
+        /// error reporters that print the chain would repeat it.
+        error: io::Error,
     },
     /// The destination path has no file name (such as `/` or `..`).
     #[error("{file}: not a file path")]

@@ -137,9 +137,9 @@ pub fn read_point_cloud(path: &Path) -> Result<PointCloud, ReadError> {
         Err(None) => return Err(ReadError::NoExtension { file }),
         Err(Some(extension)) => return Err(ReadError::UnknownExtension { file, extension }),
     };
-    let opened = File::open(path).map_err(|source| ReadError::Io {
+    let opened = File::open(path).map_err(|error| ReadError::Io {
         file: file.clone(),
-        source,
+        error,
     })?;
     let size = opened.metadata().ok().map(|m| m.len());
     let reader = BufReader::with_capacity(1 << 20, opened);

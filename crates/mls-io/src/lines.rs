@@ -40,9 +40,9 @@ impl<R: BufRead> Lines<R> {
             let read = self
                 .reader
                 .read_until(b'\n', &mut self.buf)
-                .map_err(|source| ReadError::Io {
+                .map_err(|error| ReadError::Io {
                     file: file.to_owned(),
-                    source,
+                    error,
                 })?;
             if read == 0 {
                 return Ok(None);

@@ -230,9 +230,9 @@ pub(crate) fn read(
 }
 
 fn io_error(file: &str) -> impl FnOnce(io::Error) -> ReadError + '_ {
-    move |source| ReadError::Io {
+    move |error| ReadError::Io {
         file: file.to_owned(),
-        source,
+        error,
     }
 }
 

@@ -6,7 +6,7 @@
 
 use std::fmt::Write as _;
 use std::fs::File;
-use std::io::{BufWriter, Write};
+use std::io::{self, BufWriter, Write};
 use std::path::Path;
 use std::slice;
 
@@ -237,9 +237,9 @@ pub fn write_xyz_to(
 }
 
 fn io_error(file: &str) -> impl FnOnce(std::io::Error) -> WriteError + '_ {
-    move |source| WriteError::Io {
+    move |error| WriteError::Io {
         file: file.to_owned(),
-        source,
+        error,
     }
 }
 
@@ -314,7 +314,13 @@ fn write_atomically(
         use std::os::unix::fs::PermissionsExt;
         builder.permissions(std::fs::Permissions::from_mode(0o666));
     }
-    let temp = builder.tempfile_in(dir).map_err(io_error(&file))?;
+    // tempfile's errors name the temporary path, which means nothing to the user: report a
+    // missing directory with the OS's own words, anything else by its kind, naming the
+    // destination.
+    std::fs::metadata(dir).map_err(io_error(&file))?;
+    let temp = builder
+        .tempfile_in(dir)
+        .map_err(|e| io_error(&file)(io::Error::new(e.kind(), e.kind().to_string())))?;
     {
         let mut out = BufWriter::with_capacity(BUFFER_BYTES, temp.as_file());
         body(&mut out)?;
@@ -323,7 +329,7 @@ fn write_atomically(
     temp.as_file().sync_all().map_err(io_error(&file))?;
     temp.persist(path).map_err(|err| WriteError::Io {
         file: file.clone(),
-        source: err.error,
+        error: err.error,
     })?;
     Ok(())
 }

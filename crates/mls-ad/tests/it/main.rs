@@ -73,6 +73,37 @@ fn closed_form_matches_hyper_dual_witness() {
             );
         }
         assert!(closed.log_scale == w.log_scale);
+        // Curvature by mls-core's 2 × 2 closed form against the witness's 3 × 3 eigen-decomposition.
+        let c = mls_core::curvature(&closed.gradient, &closed.hessian).expect("regular point");
+        let wc = mls_ad::witness_curvature(&w.gradient, &w.hessian);
+        let kappa = hscale / gscale;
+        for (got, want, what) in [
+            (c.k1, wc.k1, "k1"),
+            (c.k2, wc.k2, "k2"),
+            (c.mean, wc.mean, "mean"),
+        ] {
+            assert!(
+                rel(got, want, kappa) < 1e-10,
+                "case {case}: {what} {got} vs {want}"
+            );
+        }
+        assert!(
+            rel(c.gauss, wc.gauss, kappa * kappa) < 1e-10,
+            "case {case}: gauss {} vs {}",
+            c.gauss,
+            wc.gauss
+        );
+        assert!((c.normal - w.gradient / gscale).norm() < 1e-12);
+        // Directions up to sign, weighted by the eigengap that makes them meaningful.
+        let gap = (wc.k1 - wc.k2) / kappa;
+        for (d, wd) in [(c.d1, wc.d1), (c.d2, wc.d2)] {
+            assert!(
+                d.cross(&wd).norm() * gap < 1e-10,
+                "case {case}: direction {d:?} vs {wd:?}"
+            );
+            assert!((d.norm() - 1.0).abs() < 1e-12 && d.dot(&c.normal).abs() < 1e-12);
+        }
+        assert!((c.d1.cross(&c.d2) - c.normal).norm() < 1e-12, "d1 × d2 = n");
         let eq5 = mls_ad::implicit_from_energy(&x.coords, &samples, a, w.log_scale);
         assert!(
             rel(eq5, w.value, gscale * h) < 1e-12,
