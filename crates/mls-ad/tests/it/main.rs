@@ -73,6 +73,14 @@ fn closed_form_matches_hyper_dual_witness() {
             );
         }
         assert!(closed.log_scale == w.log_scale);
+        let unshifted = mls_ad::implicit(&x.coords, &samples, a, 0.0);
+        assert!(
+            rel(
+                closed.unscaled_value(),
+                unshifted,
+                gscale * h * (-w.log_scale).exp()
+            ) < 1e-10
+        );
         // Curvature by mls-core's 2 × 2 closed form against the witness's 3 × 3 eigen-decomposition.
         let c = mls_core::curvature(&closed.gradient, &closed.hessian).expect("regular point");
         let wc = mls_ad::witness_curvature(&w.gradient, &w.hessian);
