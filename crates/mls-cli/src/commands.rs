@@ -5,7 +5,7 @@ use mls_core::normals::{DEFAULT_NEIGHBOURS, NeighbourGraph, orientation_consiste
 use mls_core::{MlsConfig, MlsSurface, Parallelism, Point, PointResult, PointStatus, Vector};
 use mls_io::{Axis, Column, PlyFormat};
 
-use crate::pipeline::{self, Timings};
+use crate::pipeline::{self, Prepared, Timings};
 use crate::{
     At, CurvatureArgs, EvalArgs, InfoArgs, NormalsArgs, ProjectArgs, interactive, status_code,
 };
@@ -35,17 +35,13 @@ pub fn curvature(a: CurvatureArgs) -> Result<()> {
     pipeline::with_threads(s.threads, || {
         let mut t = Timings::default();
         let par = Parallelism::Rayon;
-        let cloud = t.time("read", || pipeline::read(&a.input))?;
-        let points = pipeline::to_points(&cloud);
-        let scale = t.time("spacing", || {
-            pipeline::choose_h(&points, s.h, s.h_factor, par, &a.input)
-        })?;
-        let normals = t.time("normals", || {
-            pipeline::normals(&cloud, &points, s.normals, s.orient, scale.h, par, &a.input)
-        })?;
-        let surface = t.time("index", || {
-            pipeline::surface(&points, &normals.normals, scale.h, s.cutoff, &a.input)
-        })?;
+        let Prepared {
+            cloud,
+            points,
+            scale,
+            normals,
+            surface,
+        } = pipeline::prepare(&a.input, s, &mut t)?;
         let label = match a.at {
             At::Input => "curvature",
             At::Projected => "projection",
@@ -271,7 +267,7 @@ pub fn normals(a: NormalsArgs) -> Result<()> {
         let cloud = t.time("read", || pipeline::read(&a.input))?;
         let points = pipeline::to_points(&cloud);
         let scale = t.time("spacing", || {
-            pipeline::choose_h(&points, a.h, a.h_factor, par, &a.input)
+            pipeline::choose_h(&points, a.scale.h, a.scale.h_factor, par, &a.input)
         })?;
         let est = t.time("normals", || {
             pipeline::normals(
@@ -332,17 +328,13 @@ pub fn project(a: ProjectArgs) -> Result<()> {
     pipeline::with_threads(s.threads, || {
         let mut t = Timings::default();
         let par = Parallelism::Rayon;
-        let cloud = t.time("read", || pipeline::read(&a.input))?;
-        let points = pipeline::to_points(&cloud);
-        let scale = t.time("spacing", || {
-            pipeline::choose_h(&points, s.h, s.h_factor, par, &a.input)
-        })?;
-        let normals = t.time("normals", || {
-            pipeline::normals(&cloud, &points, s.normals, s.orient, scale.h, par, &a.input)
-        })?;
-        let surface = t.time("index", || {
-            pipeline::surface(&points, &normals.normals, scale.h, s.cutoff, &a.input)
-        })?;
+        let Prepared {
+            cloud,
+            points,
+            scale,
+            normals,
+            surface,
+        } = pipeline::prepare(&a.input, s, &mut t)?;
         let results = t.time("projection", || {
             crate::progress::chunked(points.len(), "projection", interactive(s.quiet), |r| {
                 surface.project_points(&points[r], par)

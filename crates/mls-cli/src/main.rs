@@ -74,15 +74,22 @@ enum At {
     Projected,
 }
 
-/// Options shared by the commands that build an MLS surface.
+/// The Gaussian scale, given or derived from the spacing.
 #[derive(Debug, Args)]
-struct SurfaceArgs {
+struct ScaleArgs {
     /// Gaussian scale h, in the units of the file. Default: --h-factor × the point spacing.
     #[arg(long, value_parser = positive_finite, conflicts_with = "h_factor", allow_negative_numbers = true)]
     h: Option<f64>,
     /// h as a multiple of the median local point spacing.
     #[arg(long, value_parser = positive_finite, default_value_t = mls_core::normals::DEFAULT_H_FACTOR, allow_negative_numbers = true)]
     h_factor: f64,
+}
+
+/// Options shared by the commands that build an MLS surface.
+#[derive(Debug, Args)]
+struct SurfaceArgs {
+    #[command(flatten)]
+    scale: ScaleArgs,
     /// Kernel cutoff radius in units of h (at least 2), or `none` for the untruncated kernel.
     #[arg(long, value_parser = parse_cutoff, default_value = "5", allow_negative_numbers = true)]
     cutoff: mls_core::Cutoff,
@@ -149,12 +156,8 @@ struct NormalsArgs {
     input: PathBuf,
     #[command(flatten)]
     out: OutputArgs,
-    /// Scale h of the covariance weights. Default: --h-factor × the point spacing.
-    #[arg(long, value_parser = positive_finite, conflicts_with = "h_factor", allow_negative_numbers = true)]
-    h: Option<f64>,
-    /// h as a multiple of the median local point spacing.
-    #[arg(long, value_parser = positive_finite, default_value_t = mls_core::normals::DEFAULT_H_FACTOR, allow_negative_numbers = true)]
-    h_factor: f64,
+    #[command(flatten)]
+    scale: ScaleArgs,
     /// Orientation: `mst`, `viewpoint:X,Y,Z`, or `none`.
     #[arg(long, value_parser = parse_orient, default_value = "mst")]
     orient: mls_core::normals::Orientation,

@@ -11,7 +11,7 @@ use mls_core::normals::{
 use mls_core::{Cutoff, MlsConfig, MlsSurface, Parallelism, Point, PointStatus, Vector};
 use mls_io::PointCloud;
 
-use crate::NormalsMode;
+use crate::{NormalsMode, SurfaceArgs};
 
 /// The smallest cloud a neighbourhood can be built from: a covariance normal needs 3 points
 /// besides the centre, the MLS evaluation at least 3 samples.
@@ -164,6 +164,38 @@ pub fn normals(
     Ok(Normals {
         normals: est.normals().into_iter().map(Result::ok).collect(),
         source,
+    })
+}
+
+/// Everything a command needs before evaluating: the cloud, its points, h, normals and surface.
+pub struct Prepared {
+    pub cloud: PointCloud,
+    pub points: Vec<Point>,
+    pub scale: Scale,
+    pub normals: Normals,
+    pub surface: MlsSurface,
+}
+
+/// Reads the input, chooses h, gets oriented normals and builds the surface, timing each stage.
+pub fn prepare(input: &Path, s: &SurfaceArgs, t: &mut Timings) -> Result<Prepared> {
+    let par = Parallelism::Rayon;
+    let cloud = t.time("read", || read(input))?;
+    let points = to_points(&cloud);
+    let scale = t.time("spacing", || {
+        choose_h(&points, s.scale.h, s.scale.h_factor, par, input)
+    })?;
+    let normals = t.time("normals", || {
+        normals(&cloud, &points, s.normals, s.orient, scale.h, par, input)
+    })?;
+    let surface = t.time("index", || {
+        surface(&points, &normals.normals, scale.h, s.cutoff, input)
+    })?;
+    Ok(Prepared {
+        cloud,
+        points,
+        scale,
+        normals,
+        surface,
     })
 }
 

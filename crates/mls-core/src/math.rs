@@ -74,6 +74,21 @@ pub fn tangent_basis(n: &Vector) -> (Vector, Vector) {
     (t1, t2)
 }
 
+/// The centre of the bounding box (zero for no points). Coordinates are taken relative to it
+/// before any geometry, so that clouds far from the origin (georeferenced scans) keep their
+/// precision in `x − q`.
+pub fn bounding_box_centre(points: &[Point]) -> Vector {
+    let Some(first) = points.first() else {
+        return Vector::zeros();
+    };
+    let (lo, hi) = points
+        .iter()
+        .fold((first.coords, first.coords), |(lo, hi), p| {
+            (lo.inf(&p.coords), hi.sup(&p.coords))
+        });
+    (lo + hi) * 0.5
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -231,16 +231,4 @@ fn check_points(points: &[Point]) -> Result<(), NormalsError> {
     }
 }
 
-/// The centre of the bounding box. Coordinates are taken relative to it before they enter a
-/// kd-tree, so that clouds far from the origin (georeferenced scans) keep their precision.
-fn bounding_box_centre(points: &[Point]) -> Vector {
-    let Some(first) = points.first() else {
-        return Vector::zeros();
-    };
-    let (lo, hi) = points
-        .iter()
-        .fold((first.coords, first.coords), |(lo, hi), p| {
-            (lo.inf(&p.coords), hi.sup(&p.coords))
-        });
-    (lo + hi) * 0.5
-}
+pub(crate) use crate::math::bounding_box_centre;

@@ -8,7 +8,7 @@ use crate::curvature::{Curvature, curvature};
 use crate::error::ConfigError;
 use crate::field::{FieldScratch, Implicit, Sample, evaluate};
 use crate::kernel::{Cutoff, Kernel};
-use crate::math::{Point, UnitNormal, Vector};
+use crate::math::{Point, UnitNormal, Vector, bounding_box_centre};
 use crate::projection::{LineSample, ProjectionConfig, line_minimum};
 use crate::status::PointStatus;
 
@@ -179,18 +179,6 @@ impl MlsSurface {
                 .collect(),
         }
     }
-}
-
-fn bounding_box_centre(points: &[Point]) -> Vector {
-    let Some(first) = points.first() else {
-        return Vector::zeros();
-    };
-    let (lo, hi) = points
-        .iter()
-        .fold((first.coords, first.coords), |(lo, hi), p| {
-            (lo.inf(&p.coords), hi.sup(&p.coords))
-        });
-    (lo + hi) * 0.5
 }
 
 /// Evaluates the surface at query points without allocating per query (after warm-up).
