@@ -77,6 +77,13 @@ fn statuses_instead_of_numbers() {
             .err(),
         Some(PointStatus::NormalUndefined)
     );
+    // Just off the mid-plane the sum no longer cancels exactly: |Σwv|/Σw is 5e-8 at
+    // δ = 4e-9 (below the coherence threshold 1e-6) while |Σwv|·Σw is 3e-5 (above it), so
+    // this pins the ratio. At δ = 5e-3 the nearer sheet dominates and all is defined.
+    let mut ev = sheets.evaluator();
+    let near_mid = ev.curvature_at(&Point::new(0.2, 0.2, 4e-9));
+    assert_eq!(near_mid.err(), Some(PointStatus::NormalUndefined));
+    assert!(ev.curvature_at(&Point::new(0.2, 0.2, 5e-3)).is_ok());
 
     // A single point, and fewer than the minimum number of neighbours.
     let single = MlsSurface::new(&[Point::origin()], &[Vector::z()], MlsConfig::new(1.0)).unwrap();
