@@ -57,8 +57,8 @@ const FAULTS: &[Fault] = &[
         name: "F6 ∂²m curvature term 4/h⁴ → 2/h⁴",
         description: "∇∇θ = θ(4 d dᵀ/h⁴ − 2I/h²) written with 2 d dᵀ/h⁴",
         file: "crates/mls-core/src/field.rs",
-        original: "s2[c] * (4.0 * a * a)",
-        replacement: "s2[c] * (2.0 * a * a)",
+        original: "s2[c].matrix() * (4.0 * a * a)",
+        replacement: "s2[c].matrix() * (2.0 * a * a)",
     },
 ];
 

@@ -104,35 +104,61 @@ pub fn evaluate(
 
     let field = normal_field_weighted(x, samples, weights, a)?;
     let n = field.normal;
+    // K = Jᵀ, so that D = ∂B/∂x = n + K d (the paper's D).
     let jt = field.jacobian.transpose();
+    // The sum over samples is split into weighted moments of d, so that per sample only
+    // scalars, vectors and symmetric d dᵀ products are accumulated, and J enters once at the
+    // end: with D = n + K d,
+    //   Σ c (d Dᵀ + D dᵀ) = V nᵀ + n Vᵀ + Q Kᵀ + K Q     (V = Σ c d, Q = Σ c d dᵀ)
+    //   Σ c D Dᵀ = S n nᵀ + n (K V)ᵀ + K V nᵀ + K Q Kᵀ   (S = Σ c).
     let mut value = 0.0;
-    let mut gradient = Vector::zeros();
-    let mut hessian = Matrix::zeros();
+    let mut sum_alpha = 0.0;
+    let mut sum_alpha_d = Vector::zeros();
     let mut sum_beta = 0.0;
     let mut sum_beta_d = Vector::zeros();
+    let mut q_dd = Sym::default();
+    let (mut v_sym, mut q_sym) = (Vector::zeros(), Sym::default());
+    let (mut s_bb, mut v_bb, mut q_bb) = (0.0, Vector::zeros(), Sym::default());
     for (s, &w) in samples.iter().zip(weights.iter()) {
         let d = x - s.point;
         let b = d.dot(&n);
         let b2 = b * b;
-        // ∂B/∂x = n + Jᵀd (the paper's D).
-        let db = n + jt * d;
         let alpha = 2.0 * a * b * (a * b2 - 1.0);
         let beta = 1.0 - 3.0 * a * b2;
         let w2 = 2.0 * w;
         value += w2 * (b - a * b * b2);
-        gradient += (d * alpha + db * beta) * w2;
         let c_dd = -2.0 * a * alpha;
         let c_sym = 6.0 * a * a * b2 - 2.0 * a;
         let c_bb = -6.0 * a * b;
-        let dbt = d * db.transpose();
-        hessian += (d * d.transpose() * c_dd
-            + (dbt + dbt.transpose()) * c_sym
-            + db * db.transpose() * c_bb
-            + Matrix::from_diagonal_element(alpha))
-            * w2;
+        let dd = Sym::outer(&d);
+        sum_alpha += w2 * alpha;
+        sum_alpha_d += d * (w2 * alpha);
         sum_beta += w2 * beta;
         sum_beta_d += d * (w2 * beta);
+        q_dd.add_scaled(&dd, w2 * c_dd);
+        v_sym += d * (w2 * c_sym);
+        q_sym.add_scaled(&dd, w2 * c_sym);
+        s_bb += w2 * c_bb;
+        v_bb += d * (w2 * c_bb);
+        q_bb.add_scaled(&dd, w2 * c_bb);
     }
+    // ∇g = Σ 2w (α d + β D).
+    let gradient = sum_alpha_d + n * sum_beta + jt * sum_beta_d;
+    let (q_sym, q_bb) = (q_sym.matrix(), q_bb.matrix());
+    let kq = jt * q_sym;
+    let kv = jt * v_bb;
+    let nvt = v_sym * n.transpose();
+    let nkv = kv * n.transpose();
+    let mut hessian = q_dd.matrix()
+        + nvt
+        + nvt.transpose()
+        + kq
+        + kq.transpose()
+        + n * n.transpose() * s_bb
+        + nkv
+        + nkv.transpose()
+        + jt * q_bb * jt.transpose()
+        + Matrix::from_diagonal_element(sum_alpha);
     // Σ 2wβ ∂D/∂x with ∂D/∂x = J + Jᵀ + Σ_a d_a ∂²n_a (Appendix), the sums factored out.
     hessian += (field.jacobian + jt) * sum_beta
         + field.second[0] * sum_beta_d.x
@@ -167,17 +193,17 @@ fn normal_field_weighted(
     let mut m = Vector::zeros();
     let mut s1 = Matrix::zeros();
     // s2[c] = Σ w v_c d dᵀ, symmetric.
-    let mut s2 = [Matrix::zeros(); 3];
+    let mut s2 = [Sym::default(); 3];
     let mut weight_sum = 0.0;
     for (s, &w) in samples.iter().zip(weights) {
         let d = x - s.point;
         let wv = s.normal * w;
         m += wv;
         s1 += wv * d.transpose();
-        let ddt = d * d.transpose();
-        s2[0] += ddt * wv.x;
-        s2[1] += ddt * wv.y;
-        s2[2] += ddt * wv.z;
+        let dd = Sym::outer(&d);
+        s2[0].add_scaled(&dd, wv.x);
+        s2[1].add_scaled(&dd, wv.y);
+        s2[2].add_scaled(&dd, wv.z);
         weight_sum += w;
     }
     let r = m.norm();
@@ -190,7 +216,7 @@ fn normal_field_weighted(
     // M2_c = 4a² Σ w v_c d dᵀ − 2a m_c I, but only P M2 is used and P m = 0 (m ∥ n): the
     // identity part never contributes, so it is not formed (mutation testing showed that
     // changing it changed nothing).
-    let m2: [Matrix; 3] = std::array::from_fn(|c| s2[c] * (4.0 * a * a));
+    let m2: [Matrix; 3] = std::array::from_fn(|c| s2[c].matrix() * (4.0 * a * a));
     let p = Matrix::identity() - n * n.transpose();
     let jacobian = p * m1 / r;
     let u = m1.transpose() * n;
@@ -208,4 +234,26 @@ fn normal_field_weighted(
         second,
         coherence,
     })
+}
+
+/// A symmetric 3 × 3 accumulator holding the six distinct entries.
+#[derive(Clone, Copy, Debug, Default)]
+struct Sym([f64; 6]);
+
+impl Sym {
+    /// `d dᵀ`.
+    fn outer(d: &Vector) -> Self {
+        Self([d.x * d.x, d.x * d.y, d.x * d.z, d.y * d.y, d.y * d.z, d.z * d.z])
+    }
+
+    fn add_scaled(&mut self, other: &Self, c: f64) {
+        for (a, b) in self.0.iter_mut().zip(other.0) {
+            *a += c * b;
+        }
+    }
+
+    fn matrix(&self) -> Matrix {
+        let [xx, xy, xz, yy, yz, zz] = self.0;
+        Matrix::new(xx, xy, xz, xy, yy, yz, xz, yz, zz)
+    }
 }
