@@ -90,17 +90,14 @@ pub fn evaluate(
         return Err(PointStatus::NoNeighbours);
     }
     let a = inv_h2;
-    let shift = samples
-        .iter()
-        .map(|s| (x - s.point).norm_squared())
-        .fold(f64::INFINITY, f64::min);
+    // Squared distances first, then the shifted weights in place.
     let weights = &mut scratch.weights;
     weights.clear();
-    weights.extend(
-        samples
-            .iter()
-            .map(|s| (-((x - s.point).norm_squared() - shift) * a).exp()),
-    );
+    weights.extend(samples.iter().map(|s| (x - s.point).norm_squared()));
+    let shift = weights.iter().copied().fold(f64::INFINITY, f64::min);
+    for w in weights.iter_mut() {
+        *w = (-(*w - shift) * a).exp();
+    }
 
     let field = normal_field_weighted(x, samples, weights, a)?;
     let n = field.normal;
@@ -243,7 +240,14 @@ struct Sym([f64; 6]);
 impl Sym {
     /// `d dᵀ`.
     fn outer(d: &Vector) -> Self {
-        Self([d.x * d.x, d.x * d.y, d.x * d.z, d.y * d.y, d.y * d.z, d.z * d.z])
+        Self([
+            d.x * d.x,
+            d.x * d.y,
+            d.x * d.z,
+            d.y * d.y,
+            d.y * d.z,
+            d.z * d.z,
+        ])
     }
 
     fn add_scaled(&mut self, other: &Self, c: f64) {

@@ -108,7 +108,14 @@ impl MlsSurface {
                     normal: normal.into_inner(),
                 })
             })
-            .collect::<Result<Vec<_>, ConfigError>>()?;
+            .collect::<Result<Vec<Sample>, ConfigError>>()?;
+        // Neighbours of a query are then mostly adjacent in memory, whatever the input order
+        // (scan order, or a Fibonacci spiral whose neighbours are thousands of indices apart).
+        let mut samples = samples;
+        let half_extent = samples
+            .iter()
+            .fold(0.0f64, |m, s| m.max(s.point.coords.amax()));
+        samples.par_sort_by_cached_key(|s| morton_key(&s.point, half_extent));
         let coords: Vec<[f64; 3]> = samples.iter().map(|s| s.point.coords.into()).collect();
         let tree = ImmutableKdTree::new_from_slice(&coords)
             .map_err(|_| ConfigError::TooManyPoints(points.len()))?;
@@ -146,14 +153,52 @@ impl MlsSurface {
         Evaluator {
             surface: self,
             support: Vec::new(),
+            candidates: Vec::new(),
             scratch: FieldScratch::default(),
             line: Vec::new(),
         }
     }
 
     /// Curvature at each query point (the level set of g through it), in query order.
+    ///
+    /// Queries are processed in Morton order, in clusters of nearby points that share one
+    /// neighbour search (the k-d tree query is a third of the cost of a point otherwise).
     pub fn curvature_at_points(&self, queries: &[Point], par: Parallelism) -> Vec<PointResult> {
-        self.map_queries(queries, par, |ev, q| ev.curvature_at(q))
+        let Some(radius) = self.kernel.support_radius() else {
+            return self.map_queries(queries, par, |ev, q| ev.curvature_at(q));
+        };
+        let half_extent = queries
+            .iter()
+            .filter(|q| q.iter().all(|c| c.is_finite()))
+            .fold(0.0f64, |m, q| m.max((q - self.origin).coords.amax()));
+        let key = |i: &u32| morton_key(&(queries[*i as usize] - self.origin), half_extent);
+        let mut order: Vec<u32> = (0..queries.len() as u32).collect();
+        let run = |ev: &mut Evaluator<'_>, cluster: &[u32]| {
+            ev.curvature_of_cluster(queries, cluster, radius)
+        };
+        let pairs: Vec<(u32, PointResult)> = match par {
+            Parallelism::Sequential => {
+                order.sort_by_cached_key(key);
+                let mut ev = self.evaluator();
+                order
+                    .chunks(CLUSTER)
+                    .flat_map(|c| run(&mut ev, c))
+                    .collect()
+            }
+            Parallelism::Rayon => {
+                order.par_sort_by_cached_key(key);
+                order
+                    .par_chunks(CLUSTER)
+                    .map_init(|| self.evaluator(), |ev, c| run(ev, c))
+                    .flatten_iter()
+                    .collect()
+            }
+        };
+        let mut out = vec![Err(PointStatus::InvalidQuery); queries.len()];
+        for (i, r) in pairs {
+            out[i as usize] = r;
+        }
+        out
     }
 
     /// Projects each query point onto the MLS surface and evaluates curvature there.
@@ -181,11 +226,38 @@ impl MlsSurface {
     }
 }
 
+/// Queries sharing one neighbour search in [`MlsSurface::curvature_at_points`].
+const CLUSTER: usize = 16;
+
+/// The Morton (Z-order) key of a point in the cube `[−half_extent, half_extent]³`, 21 bits per
+/// axis interleaved.
+fn morton_key(p: &Point, half_extent: f64) -> u64 {
+    const CELLS: f64 = ((1u64 << 21) - 1) as f64;
+    let scale = if half_extent > 0.0 {
+        0.5 / half_extent
+    } else {
+        0.0
+    };
+    let cell = |c: f64| (((c * scale + 0.5) * CELLS).clamp(0.0, CELLS)) as u64;
+    // Spreads the low 21 bits of v to every third bit.
+    let spread = |v: u64| {
+        let mut v = v & 0x1f_ffff;
+        v = (v | v << 32) & 0x1f_0000_0000_ffff;
+        v = (v | v << 16) & 0x1f_0000_ff00_00ff;
+        v = (v | v << 8) & 0x100f_00f0_0f00_f00f;
+        v = (v | v << 4) & 0x10c3_0c30_c30c_30c3;
+        (v | v << 2) & 0x1249_2492_4924_9249
+    };
+    spread(cell(p.x)) | spread(cell(p.y)) << 1 | spread(cell(p.z)) << 2
+}
+
 /// Evaluates the surface at query points without allocating per query (after warm-up).
 #[derive(Debug)]
 pub struct Evaluator<'a> {
     surface: &'a MlsSurface,
     support: Vec<Sample>,
+    /// Samples near a cluster of queries, filtered per query into `support`.
+    candidates: Vec<Sample>,
     scratch: FieldScratch,
     line: Vec<LineSample>,
 }
@@ -246,6 +318,75 @@ impl Evaluator<'_> {
             self.surface.kernel.inv_h2(),
             &mut self.scratch,
         )
+    }
+
+    /// Curvature at the world-space queries `queries[i]` for `i` in `cluster`: one neighbour
+    /// search around the cluster, then each query's support filtered from it. Clusters spread
+    /// wider than the support radius fall back to one search per query.
+    fn curvature_of_cluster(
+        &mut self,
+        queries: &[Point],
+        cluster: &[u32],
+        radius: f64,
+    ) -> Vec<(u32, PointResult)> {
+        let origin = self.surface.origin;
+        let finite = |q: &Point| q.iter().all(|c| c.is_finite());
+        let (sum, count) = cluster
+            .iter()
+            .map(|&i| &queries[i as usize])
+            .filter(|q| finite(q))
+            .fold((Vector::zeros(), 0usize), |(s, n), q| {
+                (s + (q - origin).coords, n + 1)
+            });
+        let centre = Point::from(sum / count.max(1) as f64);
+        let spread = cluster
+            .iter()
+            .map(|&i| &queries[i as usize])
+            .filter(|q| finite(q))
+            .fold(0.0f64, |m, q| m.max(((q - origin) - centre).norm()));
+        if count == 0 || spread > radius {
+            return cluster
+                .iter()
+                .map(|&i| (i, self.curvature_at(&queries[i as usize])))
+                .collect();
+        }
+        self.candidates.clear();
+        let s = self.surface;
+        let reach = radius + spread;
+        let candidates = &mut self.candidates;
+        s.tree
+            .query(&centre.coords.into())
+            .within::<SquaredEuclidean<f64>>(reach * reach)
+            .unsorted()
+            .visit(|hit| candidates.push(s.samples[hit.item as usize]));
+        let r2 = radius * radius;
+        cluster
+            .iter()
+            .map(|&i| {
+                let x = &queries[i as usize];
+                if !finite(x) {
+                    return (i, Err(PointStatus::InvalidQuery));
+                }
+                let local = x - origin;
+                self.support.clear();
+                let support = &mut self.support;
+                support.extend(
+                    self.candidates
+                        .iter()
+                        .filter(|c| (local - c.point).norm_squared() <= r2),
+                );
+                let result = self.implicit_at_local(&local).and_then(|implicit| {
+                    let curvature = curvature(&implicit.gradient, &implicit.hessian)
+                        .ok_or(PointStatus::GradientVanishes)?;
+                    Ok(SurfacePoint {
+                        point: *x,
+                        curvature,
+                        implicit,
+                    })
+                });
+                (i, result)
+            })
+            .collect()
     }
 
     /// Curvature of the level set of g through the world-space point `x`.
