@@ -1,6 +1,8 @@
 //! Workspace-level end-to-end tests: files through mls-io into mls-core, checked against the
 //! analytic truth or the independent AD witness. The CLI's own tests are in crates/mls-cli.
 
+mod robustness;
+
 use std::path::PathBuf;
 
 use mls_core::normals::{NormalsConfig, estimate_normals};

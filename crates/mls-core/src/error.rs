@@ -3,8 +3,8 @@
 /// Invalid parameters or input data when building a surface.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum ConfigError {
-    /// `h` must be finite and strictly positive (and `1/h²` representable).
-    #[error("Gaussian scale h must be finite and positive, got {0}")]
+    /// `h` must be finite and within `[Kernel::MIN_H, Kernel::MAX_H]` = [1e-150, 1e150].
+    #[error("Gaussian scale h must be finite and within [1e-150, 1e150], got {0}")]
     InvalidScale(f64),
     /// The cutoff factor must be finite and at least `Cutoff::MIN_FACTOR`.
     #[error("cutoff factor must be finite and at least {min}, got {0}", min = crate::Cutoff::MIN_FACTOR)]

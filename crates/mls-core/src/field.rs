@@ -89,17 +89,25 @@ pub fn evaluate(
     if samples.is_empty() {
         return Err(PointStatus::NoNeighbours);
     }
-    let a = inv_h2;
+    // Lengths are measured in units of h below (d ← d/h, so a = 1/h² becomes 1): every sum is
+    // then of order one at any scale of the cloud, and no power of 1/h² can overflow (a² alone
+    // overflows for h below about 1e-77). The results are scaled back at the end.
+    let inv_h = inv_h2.sqrt();
+    let a = 1.0;
     // Squared distances first, then the shifted weights in place.
     let weights = &mut scratch.weights;
     weights.clear();
-    weights.extend(samples.iter().map(|s| (x - s.point).norm_squared()));
+    weights.extend(
+        samples
+            .iter()
+            .map(|s| ((x - s.point) * inv_h).norm_squared()),
+    );
     let shift = weights.iter().copied().fold(f64::INFINITY, f64::min);
     for w in weights.iter_mut() {
         *w = (-(*w - shift) * a).exp();
     }
 
-    let field = normal_field_weighted(x, samples, weights, a)?;
+    let field = normal_field_weighted(x, samples, weights, inv_h)?;
     let n = field.normal;
     // K = Jᵀ, so that D = ∂B/∂x = n + K d (the paper's D).
     let jt = field.jacobian.transpose();
@@ -117,7 +125,7 @@ pub fn evaluate(
     let (mut v_sym, mut q_sym) = (Vector::zeros(), Sym::default());
     let (mut s_bb, mut v_bb, mut q_bb) = (0.0, Vector::zeros(), Sym::default());
     for (s, &w) in samples.iter().zip(weights.iter()) {
-        let d = x - s.point;
+        let d = (x - s.point) * inv_h;
         let b = d.dot(&n);
         let b2 = b * b;
         let alpha = 2.0 * a * b * (a * b2 - 1.0);
@@ -165,10 +173,17 @@ pub fn evaluate(
     if !(gradient.norm() > MIN_GRADIENT_RATIO * 2.0 * weight_sum) {
         return Err(PointStatus::GradientVanishes);
     }
+    // Back to world units: g is a length, ∇g dimensionless, H, J an inverse length, ∂²n an
+    // inverse area.
+    let field = NormalField {
+        jacobian: field.jacobian * inv_h,
+        second: field.second.map(|m| m * inv_h2),
+        ..field
+    };
     Ok(Implicit {
-        value,
+        value: value / inv_h,
         gradient,
-        hessian,
+        hessian: hessian * inv_h,
         field,
         log_scale: shift * a,
         weight_sum,
@@ -181,19 +196,21 @@ pub fn evaluate(
 /// `P = I − n nᵀ`, `u = M1ᵀ n` (= ∇r):
 /// $$ J = P M_1 / r,\qquad
 ///    N_a = \big( (P M_2)_a - J_{a\cdot} u^T - u J_{a\cdot}^T - n_a J^T M_1 \big) / r. $$
+/// Lengths are in units of h (`d = (x − q)/h`, hence `a = 1`); the caller scales J and ∂²n back.
 fn normal_field_weighted(
     x: &Point,
     samples: &[Sample],
     weights: &[f64],
-    a: f64,
+    inv_h: f64,
 ) -> Result<NormalField, PointStatus> {
+    let a = 1.0;
     let mut m = Vector::zeros();
     let mut s1 = Matrix::zeros();
     // s2[c] = Σ w v_c d dᵀ, symmetric.
     let mut s2 = [Sym::default(); 3];
     let mut weight_sum = 0.0;
     for (s, &w) in samples.iter().zip(weights) {
-        let d = x - s.point;
+        let d = (x - s.point) * inv_h;
         let wv = s.normal * w;
         m += wv;
         s1 += wv * d.transpose();

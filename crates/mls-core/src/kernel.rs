@@ -39,10 +39,16 @@ pub struct Kernel {
 }
 
 impl Kernel {
-    /// A kernel of scale `h`, checked: `h` must be finite and positive, a cutoff factor
+    /// The smallest accepted h. Between `MIN_H` and `MAX_H`, h², 1/h² and squared support
+    /// radii are normal doubles; outside, rescale the coordinates.
+    pub const MIN_H: f64 = 1e-150;
+    /// The largest accepted h (see [`Kernel::MIN_H`]).
+    pub const MAX_H: f64 = 1e150;
+
+    /// A kernel of scale `h`, checked: `h` must be within `[MIN_H, MAX_H]`, a cutoff factor
     /// finite and at least [`Cutoff::MIN_FACTOR`].
     pub fn new(h: f64, cutoff: Cutoff) -> Result<Self, ConfigError> {
-        if !(h.is_finite() && h > 0.0) {
+        if !(h.is_finite() && (Self::MIN_H..=Self::MAX_H).contains(&h)) {
             return Err(ConfigError::InvalidScale(h));
         }
         if let Cutoff::Radius(c) = cutoff
@@ -51,9 +57,6 @@ impl Kernel {
             return Err(ConfigError::InvalidCutoff(c));
         }
         let inv_h2 = 1.0 / (h * h);
-        if !inv_h2.is_finite() {
-            return Err(ConfigError::InvalidScale(h));
-        }
         Ok(Self { h, inv_h2, cutoff })
     }
 

@@ -19,7 +19,8 @@ pub enum NormalError {
     /// The vector has a NaN or infinite component.
     #[error("normal has a non-finite component")]
     NonFinite,
-    /// The vector is zero (or so short that normalising it loses all precision).
+    /// The vector is zero, or its largest component is subnormal (below 2.2e-308) so that its
+    /// direction has lost precision.
     #[error("normal has zero length")]
     Zero,
 }
@@ -30,11 +31,15 @@ impl UnitNormal {
         if !v.iter().all(|c| c.is_finite()) {
             return Err(NormalError::NonFinite);
         }
-        let len = v.norm();
-        if len <= f64::MIN_POSITIVE || !len.is_finite() {
+        // Scale by the largest component first: |v| itself overflows or underflows for
+        // lengths beyond about 1e±154, which are still valid directions. Subnormal components
+        // have lost precision: treated as zero.
+        let largest = v.amax();
+        if !(largest >= f64::MIN_POSITIVE) {
             return Err(NormalError::Zero);
         }
-        Ok(Self(v / len))
+        let scaled = v / largest;
+        Ok(Self(scaled / scaled.norm()))
     }
 
     /// Wraps a vector the caller knows to be unit length.

@@ -6,6 +6,7 @@
 //! interface, though fast, reports neither byte offsets nor property names in its errors and
 //! can panic on some inputs. Reading only x, y, z and nx, ny, nz needs little code.
 
+use std::collections::HashSet;
 use std::io::{self, BufRead, Read};
 
 use crate::error::{ReadError, quoted};
@@ -255,6 +256,8 @@ fn parse_header(reader: &mut impl BufRead, file: &str) -> Result<Header, ReadErr
     let mut bytes = 0;
     let mut encoding = None;
     let mut elements: Vec<Element> = Vec::new();
+    // Names of the current element's properties, for the duplicate check.
+    let mut property_names: HashSet<String> = HashSet::new();
     loop {
         buf.clear();
         let read = (&mut *reader)
@@ -343,6 +346,7 @@ fn parse_header(reader: &mut impl BufRead, file: &str) -> Result<Header, ReadErr
                     properties: Vec::new(),
                     line,
                 });
+                property_names.clear();
             }
             "property" => {
                 let Some(element) = elements.last_mut() else {
@@ -375,7 +379,9 @@ fn parse_header(reader: &mut impl BufRead, file: &str) -> Result<Header, ReadErr
                         ));
                     }
                 };
-                if element.properties.iter().any(|p| p.name == *name) {
+                // A set, not a scan of the earlier properties: a header of 10⁵ properties must
+                // not take quadratic time.
+                if !property_names.insert((*name).to_owned()) {
                     return Err(error(
                         line,
                         format!(

@@ -29,6 +29,7 @@
 //! ```
 #![warn(missing_docs)]
 
+pub mod adversarial;
 mod math;
 mod noise;
 mod parametric;
@@ -36,6 +37,7 @@ mod sampling;
 pub mod shapes;
 mod surface_point;
 
+pub use adversarial::{AdversarialClass, AdversarialCloud};
 pub use math::{Matrix3, Point, Scalar, Vector, tangent_basis};
 pub use noise::{add_position_noise, perturb_normals};
 pub use parametric::{
