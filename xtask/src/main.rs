@@ -5,8 +5,10 @@ use std::process::Command;
 
 use anyhow::{Context, Result, bail};
 
+mod bench;
 mod defaults;
 mod faults;
+mod robustness;
 mod validate;
 mod validate_shapes;
 
@@ -17,6 +19,11 @@ Tasks:
                  Writes target/validate/report.md. --quick: a small run for CI.
   faults         Applies each known misreading of the paper to a copy of mls-core and checks
                  that `validate --quick` catches it. Writes target/validate/faults.md.
+  robustness [--quick] [--clouds N] [--seed N] [--replay SEED] [--fuzz SECONDS]
+                 mls-core on 10,000 adversarial clouds (--quick: 400); --fuzz also runs each
+                 cargo-fuzz reader target for SECONDS. Writes target/robustness/report.md.
+  bench [--quick] Throughput, memory and scaling against issue 5's targets; writes
+                 docs/benchmarks.md. --quick: small clouds, writes target/bench/quick.md.
   defaults       The measurements behind mlscurv's defaults (--h-factor, --at); writes docs/defaults.md.
   ci             fmt --check, clippy -D warnings, tests, validate --quick.";
 
@@ -31,6 +38,8 @@ fn main() -> Result<()> {
     match task.as_str() {
         "validate" => validate::run(&validate::Options::parse(rest)?),
         "faults" => faults::run(),
+        "robustness" => robustness::run(&robustness::Options::parse(rest)?),
+        "bench" => bench::run(rest),
         "defaults" => defaults::run(),
         "ci" => ci(),
         other => bail!("unknown task `{other}`\n{TASKS}"),

@@ -176,6 +176,12 @@ pub(crate) fn run(o: &Options) -> Result<()> {
     if !failed.is_empty() {
         bail!("validation failed: {}", failed.join(", "));
     }
+    if !o.differential_only && o.replay.is_none() {
+        crate::robustness::run(&crate::robustness::Options {
+            quick: o.quick,
+            ..Default::default()
+        })?;
+    }
     Ok(())
 }
 
