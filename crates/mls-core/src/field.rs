@@ -76,6 +76,8 @@ impl Implicit {
 #[derive(Clone, Debug, Default)]
 pub struct FieldScratch {
     weights: Vec<f64>,
+    /// `(x − q)/h` per sample, computed once for both passes.
+    offsets: Vec<Vector>,
 }
 
 /// Evaluates g, ∇g and H at `x` from the given support samples in two passes (the normal-field
@@ -94,20 +96,19 @@ pub fn evaluate(
     // overflows for h below about 1e-77). The results are scaled back at the end.
     let inv_h = inv_h2.sqrt();
     let a = 1.0;
-    // Squared distances first, then the shifted weights in place.
+    // Offsets in units of h and their squared lengths first, then the shifted weights in place.
+    let offsets = &mut scratch.offsets;
+    offsets.clear();
+    offsets.extend(samples.iter().map(|s| (x - s.point) * inv_h));
     let weights = &mut scratch.weights;
     weights.clear();
-    weights.extend(
-        samples
-            .iter()
-            .map(|s| ((x - s.point) * inv_h).norm_squared()),
-    );
+    weights.extend(offsets.iter().map(|d| d.norm_squared()));
     let shift = weights.iter().copied().fold(f64::INFINITY, f64::min);
     for w in weights.iter_mut() {
         *w = (-(*w - shift) * a).exp();
     }
 
-    let field = normal_field_weighted(x, samples, weights, inv_h)?;
+    let field = normal_field_weighted(samples, offsets, weights)?;
     let n = field.normal;
     // K = Jᵀ, so that D = ∂B/∂x = n + K d (the paper's D).
     let jt = field.jacobian.transpose();
@@ -124,8 +125,7 @@ pub fn evaluate(
     let mut q_dd = Sym::default();
     let (mut v_sym, mut q_sym) = (Vector::zeros(), Sym::default());
     let (mut s_bb, mut v_bb, mut q_bb) = (0.0, Vector::zeros(), Sym::default());
-    for (s, &w) in samples.iter().zip(weights.iter()) {
-        let d = (x - s.point) * inv_h;
+    for (&d, &w) in offsets.iter().zip(weights.iter()) {
         let b = d.dot(&n);
         let b2 = b * b;
         let alpha = 2.0 * a * b * (a * b2 - 1.0);
@@ -196,12 +196,12 @@ pub fn evaluate(
 /// `P = I − n nᵀ`, `u = M1ᵀ n` (= ∇r):
 /// $$ J = P M_1 / r,\qquad
 ///    N_a = \big( (P M_2)_a - J_{a\cdot} u^T - u J_{a\cdot}^T - n_a J^T M_1 \big) / r. $$
-/// Lengths are in units of h (`d = (x − q)/h`, hence `a = 1`); the caller scales J and ∂²n back.
+/// `offsets` are `(x − q)/h`: lengths are in units of h, hence `a = 1`; the caller scales J and
+/// ∂²n back.
 fn normal_field_weighted(
-    x: &Point,
     samples: &[Sample],
+    offsets: &[Vector],
     weights: &[f64],
-    inv_h: f64,
 ) -> Result<NormalField, PointStatus> {
     let a = 1.0;
     let mut m = Vector::zeros();
@@ -209,8 +209,7 @@ fn normal_field_weighted(
     // s2[c] = Σ w v_c d dᵀ, symmetric.
     let mut s2 = [Sym::default(); 3];
     let mut weight_sum = 0.0;
-    for (s, &w) in samples.iter().zip(weights) {
-        let d = (x - s.point) * inv_h;
+    for ((s, &d), &w) in samples.iter().zip(offsets).zip(weights) {
         let wv = s.normal * w;
         m += wv;
         s1 += wv * d.transpose();
