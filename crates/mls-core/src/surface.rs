@@ -206,6 +206,15 @@ impl MlsSurface {
         self.map_queries(queries, par, |ev, q| ev.project(q))
     }
 
+    /// Appends to `out` the samples within `radius` of `x` (internal frame), in tree order.
+    fn samples_within(&self, x: &Point, radius: f64, out: &mut Vec<Sample>) {
+        self.tree
+            .query(&x.coords.into())
+            .within::<SquaredEuclidean<f64>>(radius * radius)
+            .unsorted()
+            .visit(|hit| out.push(self.samples[hit.item as usize]));
+    }
+
     fn map_queries<F>(&self, queries: &[Point], par: Parallelism, f: F) -> Vec<PointResult>
     where
         F: Fn(&mut Evaluator<'_>, &Point) -> PointResult + Sync,
@@ -269,14 +278,7 @@ impl Evaluator<'_> {
         self.support.clear();
         let s = self.surface;
         match radius {
-            Some(r) => {
-                let support = &mut self.support;
-                s.tree
-                    .query(&x.coords.into())
-                    .within::<SquaredEuclidean<f64>>(r * r)
-                    .unsorted()
-                    .visit(|hit| support.push(s.samples[hit.item as usize]));
-            }
+            Some(r) => s.samples_within(x, r, &mut self.support),
             None => self.support.extend_from_slice(&s.samples),
         }
     }
@@ -353,12 +355,7 @@ impl Evaluator<'_> {
         self.candidates.clear();
         let s = self.surface;
         let reach = radius + spread;
-        let candidates = &mut self.candidates;
-        s.tree
-            .query(&centre.coords.into())
-            .within::<SquaredEuclidean<f64>>(reach * reach)
-            .unsorted()
-            .visit(|hit| candidates.push(s.samples[hit.item as usize]));
+        s.samples_within(&centre, reach, &mut self.candidates);
         let r2 = radius * radius;
         cluster
             .iter()
