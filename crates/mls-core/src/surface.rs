@@ -171,12 +171,12 @@ impl MlsSurface {
             .iter()
             .filter(|q| q.iter().all(|c| c.is_finite()))
             .fold(0.0f64, |m, q| m.max((q - self.origin).coords.amax()));
-        let key = |i: &u32| morton_key(&(queries[*i as usize] - self.origin), half_extent);
-        let mut order: Vec<u32> = (0..queries.len() as u32).collect();
-        let run = |ev: &mut Evaluator<'_>, cluster: &[u32]| {
+        let key = |i: &usize| morton_key(&(queries[*i] - self.origin), half_extent);
+        let mut order: Vec<usize> = (0..queries.len()).collect();
+        let run = |ev: &mut Evaluator<'_>, cluster: &[usize]| {
             ev.curvature_of_cluster(queries, cluster, radius)
         };
-        let pairs: Vec<(u32, PointResult)> = match par {
+        let pairs: Vec<(usize, PointResult)> = match par {
             Parallelism::Sequential => {
                 order.sort_by_cached_key(key);
                 let mut ev = self.evaluator();
@@ -196,7 +196,7 @@ impl MlsSurface {
         };
         let mut out = vec![Err(PointStatus::InvalidQuery); queries.len()];
         for (i, r) in pairs {
-            out[i as usize] = r;
+            out[i] = r;
         }
         out
     }
@@ -328,14 +328,14 @@ impl Evaluator<'_> {
     fn curvature_of_cluster(
         &mut self,
         queries: &[Point],
-        cluster: &[u32],
+        cluster: &[usize],
         radius: f64,
-    ) -> Vec<(u32, PointResult)> {
+    ) -> Vec<(usize, PointResult)> {
         let origin = self.surface.origin;
         let finite = |q: &Point| q.iter().all(|c| c.is_finite());
         let (sum, count) = cluster
             .iter()
-            .map(|&i| &queries[i as usize])
+            .map(|&i| &queries[i])
             .filter(|q| finite(q))
             .fold((Vector::zeros(), 0usize), |(s, n), q| {
                 (s + (q - origin).coords, n + 1)
@@ -343,13 +343,13 @@ impl Evaluator<'_> {
         let centre = Point::from(sum / count.max(1) as f64);
         let spread = cluster
             .iter()
-            .map(|&i| &queries[i as usize])
+            .map(|&i| &queries[i])
             .filter(|q| finite(q))
             .fold(0.0f64, |m, q| m.max(((q - origin) - centre).norm()));
         if count == 0 || spread > radius {
             return cluster
                 .iter()
-                .map(|&i| (i, self.curvature_at(&queries[i as usize])))
+                .map(|&i| (i, self.curvature_at(&queries[i])))
                 .collect();
         }
         self.candidates.clear();
@@ -360,7 +360,7 @@ impl Evaluator<'_> {
         cluster
             .iter()
             .map(|&i| {
-                let x = &queries[i as usize];
+                let x = &queries[i];
                 if !finite(x) {
                     return (i, Err(PointStatus::InvalidQuery));
                 }
