@@ -433,7 +433,10 @@ impl Evaluator<'_> {
             }));
             let t = line_minimum(&self.line, a, h, &cfg).ok_or(PointStatus::ProjectionFailed)?;
             local += n * t;
-            if t.abs() < cfg.tolerance * h {
+            // Below the position's own rounding (8 ulps) no step can be resolved, whatever
+            // `tolerance · h` asks for.
+            let resolution = 8.0 * f64::EPSILON * local.coords.amax();
+            if t.abs() < (cfg.tolerance * h).max(resolution) {
                 converged = true;
                 break;
             }
