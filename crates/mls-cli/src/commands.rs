@@ -32,7 +32,7 @@ fn vector_columns<'a>(names: [&'a str; 3], v: &'a [[f64; 3]]) -> [Column<'a>; 3]
 pub fn curvature(a: CurvatureArgs) -> Result<()> {
     pipeline::check_output(&a.input, &a.out.output)?;
     let s = &a.surface;
-    pipeline::with_threads(s.threads, || {
+    pipeline::with_threads(s.run.threads, || {
         let mut t = Timings::default();
         let par = Parallelism::Rayon;
         let Prepared {
@@ -46,14 +46,15 @@ pub fn curvature(a: CurvatureArgs) -> Result<()> {
             At::Input => "curvature",
             At::Projected => "projection",
         };
-        let results: Vec<PointResult> = t.time(label, || {
-            crate::progress::chunked(points.len(), label, interactive(s.quiet), |range| {
-                match a.at {
-                    At::Input => surface.curvature_at_points(&points[range], par),
-                    At::Projected => surface.project_points(&points[range], par),
-                }
-            })
-        });
+        let results: Vec<PointResult> =
+            t.time(label, || {
+                crate::progress::chunked(points.len(), label, interactive(s.run.quiet), |range| {
+                    match a.at {
+                        At::Input => surface.curvature_at_points(&points[range], par),
+                        At::Projected => surface.project_points(&points[range], par),
+                    }
+                })
+            });
         let n = results.len();
         let mut pos = Vec::with_capacity(n);
         let mut nrm = Vec::with_capacity(n);
@@ -108,7 +109,7 @@ pub fn curvature(a: CurvatureArgs) -> Result<()> {
         t.time("write", || {
             mls_io::write_point_cloud(&a.out.output, &columns, ply_format(a.out.ascii))
         })?;
-        if !s.quiet {
+        if !s.run.quiet {
             eprintln!("mlscurv curvature: {}", a.input.display());
             eprintln!("  points read     {}", points.len());
             eprintln!("  h               {:.6} = {}", scale.h, scale.why);
@@ -261,7 +262,7 @@ pub fn eval(a: EvalArgs) -> Result<()> {
 
 pub fn normals(a: NormalsArgs) -> Result<()> {
     pipeline::check_output(&a.input, &a.out.output)?;
-    pipeline::with_threads(a.threads, || {
+    pipeline::with_threads(a.run.threads, || {
         let mut t = Timings::default();
         let par = Parallelism::Rayon;
         let cloud = t.time("read", || pipeline::read(&a.input))?;
@@ -306,7 +307,7 @@ pub fn normals(a: NormalsArgs) -> Result<()> {
         t.time("write", || {
             mls_io::write_point_cloud(&a.out.output, &columns, ply_format(a.out.ascii))
         })?;
-        if !a.quiet {
+        if !a.run.quiet {
             eprintln!("mlscurv normals: {}", a.input.display());
             eprintln!("  points read     {}", points.len());
             eprintln!("  h               {:.6} = {}", scale.h, scale.why);
@@ -325,7 +326,7 @@ pub fn normals(a: NormalsArgs) -> Result<()> {
 pub fn project(a: ProjectArgs) -> Result<()> {
     pipeline::check_output(&a.input, &a.out.output)?;
     let s = &a.surface;
-    pipeline::with_threads(s.threads, || {
+    pipeline::with_threads(s.run.threads, || {
         let mut t = Timings::default();
         let par = Parallelism::Rayon;
         let Prepared {
@@ -336,7 +337,7 @@ pub fn project(a: ProjectArgs) -> Result<()> {
             surface,
         } = pipeline::prepare(&a.input, s, &mut t)?;
         let results = t.time("projection", || {
-            crate::progress::chunked(points.len(), "projection", interactive(s.quiet), |r| {
+            crate::progress::chunked(points.len(), "projection", interactive(s.run.quiet), |r| {
                 surface.project_points(&points[r], par)
             })
         });
@@ -363,7 +364,7 @@ pub fn project(a: ProjectArgs) -> Result<()> {
         t.time("write", || {
             mls_io::write_point_cloud(&a.out.output, &columns, ply_format(a.out.ascii))
         })?;
-        if !s.quiet {
+        if !s.run.quiet {
             let moved: Vec<f64> = pos
                 .iter()
                 .zip(&cloud.points)

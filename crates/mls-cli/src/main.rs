@@ -74,6 +74,17 @@ enum At {
     Projected,
 }
 
+/// How a command runs: threads and chatter.
+#[derive(Debug, Args)]
+struct RunArgs {
+    /// Worker threads (default: all cores).
+    #[arg(long, value_parser = clap::value_parser!(u16).range(1..))]
+    threads: Option<u16>,
+    /// No summary or progress on stderr.
+    #[arg(long, short)]
+    quiet: bool,
+}
+
 /// The Gaussian scale, given or derived from the spacing.
 #[derive(Debug, Args)]
 struct ScaleArgs {
@@ -100,12 +111,8 @@ struct SurfaceArgs {
     /// `viewpoint:X,Y,Z` (towards a scanner position), or `none`.
     #[arg(long, value_parser = parse_orient, default_value = "mst")]
     orient: mls_core::normals::Orientation,
-    /// Worker threads (default: all cores).
-    #[arg(long, value_parser = clap::value_parser!(u16).range(1..))]
-    threads: Option<u16>,
-    /// No summary or progress on stderr.
-    #[arg(long, short)]
-    quiet: bool,
+    #[command(flatten)]
+    run: RunArgs,
 }
 
 #[derive(Debug, Args)]
@@ -161,12 +168,8 @@ struct NormalsArgs {
     /// Orientation: `mst`, `viewpoint:X,Y,Z`, or `none`.
     #[arg(long, value_parser = parse_orient, default_value = "mst")]
     orient: mls_core::normals::Orientation,
-    /// Worker threads (default: all cores).
-    #[arg(long, value_parser = clap::value_parser!(u16).range(1..))]
-    threads: Option<u16>,
-    /// No summary or progress on stderr.
-    #[arg(long, short)]
-    quiet: bool,
+    #[command(flatten)]
+    run: RunArgs,
 }
 
 #[derive(Debug, Args)]
