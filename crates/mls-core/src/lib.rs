@@ -14,6 +14,7 @@
 //!
 //! Architecture invariant: this crate does no I/O and holds no generic dual-number code.
 
+pub mod adaptive;
 pub mod curvature;
 pub mod error;
 pub mod field;
@@ -24,6 +25,9 @@ pub mod projection;
 pub mod status;
 pub mod surface;
 
+pub use adaptive::{
+    AdaptiveConfig, AdaptivePoint, AdaptiveResult, Location, adaptive_curvature, correct_shrinkage,
+};
 pub use curvature::{Curvature, curvature};
 pub use error::ConfigError;
 pub use field::{Implicit, NormalField, Sample};

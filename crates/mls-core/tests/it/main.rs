@@ -1,5 +1,6 @@
 //! mls-core integration tests: invariances, exact shapes, projection, whole-cloud evaluation.
 
+mod adaptive;
 mod adversarial;
 mod clouds;
 mod invariance;

@@ -1,0 +1,431 @@
+//! Curvature with a per-point scale: the adaptive h that Section 6 of the paper proposes.
+//!
+//! One fixed h trades two errors. The MLS curvature is biased by about `c(x) h²` (smoothing;
+//! `c` depends on the local sampling and on curvature variation), and under position noise of
+//! standard deviation σ its scatter is about `C σ / (h² √N)` with `N ≈ 2 Σw` the effective
+//! number of samples in the kernel. Here each point picks its own scale from a ladder
+//! `h_j = h_min · √2^j`:
+//!
+//! 1. **Local spacing.** Scales below `min_h_factor` × the local spacing at the point (from the
+//!    kernel's own weight sum, `s = √(π h² / Σw)` for a uniform density) under-resolve the
+//!    sampling and are skipped, so `h_min` may be set for the densest region.
+//! 2. **Noise.** σ is estimated at the first usable scale from the samples' residuals to the
+//!    local quadric given by the MLS normal and principal curvatures there, and turned into a
+//!    predicted scatter `sd_j = C σ / (h_j² √(2 Σw_j))` with [`NOISE_GAIN`] = C calibrated once
+//!    on a noisy plane (no bias, all error is noise).
+//! 3. **Scale choice (intersection of confidence intervals).** Going up the ladder, the scale
+//!    is kept while the intervals `k_j ± Γ sd_j` of all scales so far still intersect, for k1
+//!    and k2: while the estimates agree within their noise, the larger h only removes noise.
+//!    The first disagreement means the bias has become visible; the previous scale is chosen.
+//! 4. **Bias removal.** With the bias ∝ h², the pair of the chosen scale and its neighbour on
+//!    the ladder estimates it (`c h² = h² (k_b − k_a)/(h_b² − h_a²)`), and the estimate is
+//!    extrapolated to h = 0 (Richardson) when that bias exceeds twice the predicted scatter,
+//!    the point where extrapolating (which doubles the scatter) lowers the expected error.
+//!
+//! On clean data σ ≈ 0, the first scale is chosen and extrapolated; on noisy data the scale
+//! grows until the bias shows. `docs/paper.md` measures both.
+
+use rayon::prelude::*;
+
+use crate::curvature::Curvature;
+use crate::error::ConfigError;
+use crate::math::{Point, Vector};
+use crate::status::PointStatus;
+use crate::surface::{MlsConfig, MlsSurface, Parallelism};
+
+/// `C` in the predicted scatter `C σ / (h² √(2 Σw))` of each principal curvature under
+/// position noise σ, for the Gaussian kernel with cutoff 5h. Measured on noisy planes (the
+/// test `noise_gain_matches_a_noisy_plane` re-measures it).
+pub const NOISE_GAIN: f64 = 2.0;
+
+/// Ratio of successive scales of the ladder.
+pub const SCALE_RATIO: f64 = std::f64::consts::SQRT_2;
+
+/// Where the curvature is evaluated.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Location {
+    /// At the query point (the level set of g through it).
+    Input,
+    /// At the query's projection onto the MLS surface of each scale.
+    Projected,
+}
+
+/// Parameters of [`adaptive_curvature`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AdaptiveConfig {
+    /// The smallest scale of the ladder.
+    pub h_min: f64,
+    /// Number of scales, each [`SCALE_RATIO`] times the previous (at least 2).
+    pub scales: usize,
+    /// Γ, the half-width of the confidence intervals in predicted standard deviations.
+    pub confidence: f64,
+    /// Scales below this multiple of the local spacing are not used at a point.
+    pub min_h_factor: f64,
+    /// Cutoff, minimum neighbours and projection rules; its `h` is ignored.
+    pub surface: MlsConfig,
+}
+
+impl AdaptiveConfig {
+    /// Five scales from `h_min` to `4 h_min`, Γ = 2, scales of at least 2 local spacings.
+    pub fn new(h_min: f64) -> Self {
+        Self {
+            h_min,
+            scales: 5,
+            confidence: 2.0,
+            min_h_factor: crate::normals::DEFAULT_H_FACTOR,
+            surface: MlsConfig::new(h_min),
+        }
+    }
+
+    /// The scale `h_j`.
+    pub fn scale(&self, j: usize) -> f64 {
+        self.h_min * SCALE_RATIO.powi(j as i32)
+    }
+}
+
+/// The adaptive estimate at one query point.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AdaptivePoint {
+    /// Where the curvature was evaluated (the query, or its projection at scale `h`).
+    pub point: Point,
+    /// The curvature; `k1`, `k2`, `mean`, `gauss` extrapolated when `extrapolated` is set,
+    /// normal and directions those of scale `h`.
+    pub curvature: Curvature,
+    /// The chosen scale.
+    pub h: f64,
+    /// Estimated position noise σ around the point.
+    pub noise: f64,
+    /// Predicted standard deviation of k1 and k2 from noise at the chosen scale (before any
+    /// extrapolation, which roughly doubles it).
+    pub scatter: f64,
+    /// Whether the h² bias was removed by extrapolation.
+    pub extrapolated: bool,
+}
+
+/// Outcome for one query point.
+pub type AdaptiveResult = Result<AdaptivePoint, PointStatus>;
+
+#[derive(Clone, Copy, Debug)]
+struct Estimate {
+    h: f64,
+    point: Point,
+    curvature: Curvature,
+    /// `1 / (h² √(2 Σw))`: the scatter per unit of σ·C.
+    unit_scatter: f64,
+}
+
+#[derive(Clone, Debug, Default)]
+struct State {
+    estimates: Vec<Estimate>,
+    noise: Option<f64>,
+    /// Intersection of the confidence intervals so far, `[k1, k2]`.
+    lower: [f64; 2],
+    upper: [f64; 2],
+    chosen: Option<usize>,
+    /// The scale the chosen one is compared with for the bias.
+    partner: Option<usize>,
+    failure: Option<PointStatus>,
+    done: bool,
+}
+
+/// Curvature at each query with a per-point scale chosen from the ladder of `config`.
+///
+/// Errors are per point as in [`MlsSurface::curvature_at_points`]; the outer error is a bad
+/// configuration or cloud.
+pub fn adaptive_curvature(
+    points: &[Point],
+    normals: &[Vector],
+    queries: &[Point],
+    at: Location,
+    config: &AdaptiveConfig,
+    par: Parallelism,
+) -> Result<Vec<AdaptiveResult>, ConfigError> {
+    let scales = config.scales.max(2);
+    let mut states = vec![
+        State {
+            lower: [f64::NEG_INFINITY; 2],
+            upper: [f64::INFINITY; 2],
+            ..State::default()
+        };
+        queries.len()
+    ];
+    for j in 0..scales {
+        let active: Vec<usize> = (0..queries.len()).filter(|&i| !states[i].done).collect();
+        if active.is_empty() {
+            break;
+        }
+        let h = config.scale(j);
+        let surface = MlsSurface::new(
+            points,
+            normals,
+            MlsConfig {
+                h,
+                ..config.surface
+            },
+        )?;
+        let at_scale: Vec<Point> = active.iter().map(|&i| queries[i]).collect();
+        let results = match at {
+            Location::Input => surface.curvature_at_points(&at_scale, par),
+            Location::Projected => surface.project_points(&at_scale, par),
+        };
+        // Admissible estimates, with the noise estimate where the point has none yet.
+        let needs_noise: Vec<bool> = active.iter().map(|&i| states[i].noise.is_none()).collect();
+        let last = j + 1 == scales;
+        let step = |ev: &mut crate::surface::Evaluator<'_>, k: usize| {
+            let r = results[k].as_ref().map_err(|s| *s)?;
+            let weight_sum = r.implicit.weight_sum * (-r.implicit.log_scale).exp();
+            let spacing = (std::f64::consts::PI * h * h / weight_sum).sqrt();
+            // The largest scale is the best there is in a sparse region.
+            if !(h >= config.min_h_factor * spacing) && !last {
+                return Ok(None);
+            }
+            let noise = needs_noise[k].then(|| residual_noise(ev, &r.point, &r.curvature, h));
+            Ok(Some((
+                Estimate {
+                    h,
+                    point: r.point,
+                    curvature: r.curvature,
+                    unit_scatter: 1.0 / (h * h * (2.0 * weight_sum).sqrt()),
+                },
+                noise,
+            )))
+        };
+        type Step = Result<Option<(Estimate, Option<f64>)>, PointStatus>;
+        let steps: Vec<Step> = match par {
+            Parallelism::Sequential => {
+                let mut ev = surface.evaluator();
+                (0..active.len()).map(|k| step(&mut ev, k)).collect()
+            }
+            Parallelism::Rayon => (0..active.len())
+                .into_par_iter()
+                .with_min_len(64)
+                .map_init(|| surface.evaluator(), |ev, k| step(ev, k))
+                .collect(),
+        };
+        for (&i, step) in active.iter().zip(steps) {
+            advance(&mut states[i], step, config.confidence, last);
+        }
+    }
+    Ok(states.iter().map(finish).collect())
+}
+
+/// Takes one scale's outcome into a point's state.
+fn advance(
+    state: &mut State,
+    step: Result<Option<(Estimate, Option<f64>)>, PointStatus>,
+    confidence: f64,
+    last: bool,
+) {
+    match step {
+        Err(status) => {
+            // A larger h may still reach enough samples; once estimates exist, the ladder
+            // stops at the last good one.
+            if state.estimates.is_empty() {
+                state.failure = Some(status);
+            } else if state.chosen.is_none() {
+                state.chosen = Some(state.estimates.len() - 1);
+                state.partner = state.estimates.len().checked_sub(2);
+            }
+            state.done = state.done || !state.estimates.is_empty() || last;
+        }
+        Ok(None) => state.done = last,
+        Ok(Some((estimate, noise))) => {
+            if let Some(noise) = noise {
+                state.noise = Some(noise);
+            }
+            state.estimates.push(estimate);
+            let index = state.estimates.len() - 1;
+            if state.chosen.is_some() {
+                // This scale was only wanted as the partner of the chosen one.
+                state.partner = Some(index);
+                state.done = true;
+                return;
+            }
+            let sd = NOISE_GAIN * state.noise.unwrap_or(0.0) * estimate.unit_scatter;
+            let k = [estimate.curvature.k1, estimate.curvature.k2];
+            let mut agree = true;
+            for (c, k) in k.into_iter().enumerate() {
+                let lower = state.lower[c].max(k - confidence * sd);
+                let upper = state.upper[c].min(k + confidence * sd);
+                agree &= lower <= upper;
+                state.lower[c] = lower;
+                state.upper[c] = upper;
+            }
+            if !agree && index > 0 {
+                state.chosen = Some(index - 1);
+                state.partner = Some(index);
+                state.done = true;
+            } else if last {
+                state.chosen = Some(index);
+                state.partner = index.checked_sub(1);
+                state.done = true;
+            }
+        }
+    }
+}
+
+fn finish(state: &State) -> AdaptiveResult {
+    let Some(chosen) = state.chosen.and_then(|c| state.estimates.get(c)) else {
+        return Err(state.failure.unwrap_or(PointStatus::TooFewNeighbours));
+    };
+    let noise = state.noise.unwrap_or(0.0);
+    let scatter = NOISE_GAIN * noise * chosen.unit_scatter;
+    let mut curvature = chosen.curvature;
+    let mut extrapolated = false;
+    if let Some(partner) = state.partner.and_then(|p| state.estimates.get(p)) {
+        let (ha2, hb2) = (chosen.h * chosen.h, partner.h * partner.h);
+        let bias = |a: f64, b: f64| ha2 * (b - a) / (hb2 - ha2);
+        let b1 = bias(chosen.curvature.k1, partner.curvature.k1);
+        let b2 = bias(chosen.curvature.k2, partner.curvature.k2);
+        if b1.abs().max(b2.abs()) > 2.0 * scatter && (hb2 - ha2).abs() > 0.0 {
+            let (k1, k2) = (curvature.k1 - b1, curvature.k2 - b2);
+            // Extrapolation keeps the order except at umbilics, where both are one value.
+            let (k1, k2) = if k1 >= k2 { (k1, k2) } else { (k2, k1) };
+            curvature.k1 = k1;
+            curvature.k2 = k2;
+            curvature.mean = 0.5 * (k1 + k2);
+            curvature.gauss = k1 * k2;
+            extrapolated = true;
+        }
+    }
+    Ok(AdaptivePoint {
+        point: chosen.point,
+        curvature,
+        h: chosen.h,
+        noise,
+        scatter,
+        extrapolated,
+    })
+}
+
+/// Residuals are taken within this many h of the point: farther out the quartic terms of the
+/// real surface, which the quadric lacks, would pass for noise.
+const NOISE_WINDOW: f64 = 1.5;
+
+/// Terms of the local quadric fitted to the samples whose residuals estimate σ.
+const FITTED_TERMS: f64 = 4.0;
+
+/// σ of the samples around `x` off the local quadric `n·d = −½(k1 (d1·d)² + k2 (d2·d)²)`,
+/// Gaussian-weighted at scale `h`, about their weighted mean (which absorbs the query's own
+/// offset from the surface), corrected for the fitted terms. 0 when too few samples.
+fn residual_noise(ev: &mut crate::surface::Evaluator<'_>, x: &Point, c: &Curvature, h: f64) -> f64 {
+    let support = ev.support_of(x);
+    let a = 1.0 / (h * h);
+    let (mut sw, mut sww, mut sr, mut srr) = (0.0, 0.0, 0.0, 0.0);
+    let reach2 = (NOISE_WINDOW * h).powi(2);
+    for s in &support {
+        let d = s.point - x;
+        if d.norm_squared() > reach2 {
+            continue;
+        }
+        let (u, v) = (c.d1.dot(&d), c.d2.dot(&d));
+        let r = c.normal.dot(&d) + 0.5 * (c.k1 * u * u + c.k2 * v * v);
+        let w = (-a * d.norm_squared()).exp();
+        sw += w;
+        sww += w * w;
+        sr += w * r;
+        srr += w * r * r;
+    }
+    if !(sw > 0.0) {
+        return 0.0;
+    }
+    let mean = sr / sw;
+    // The offset and the three second-order terms were fitted to these same samples: the
+    // weighted analogue of dividing by n − 4 instead of n.
+    let effective = sw * sw / sww;
+    if !(effective > FITTED_TERMS + 1.0) {
+        return 0.0;
+    }
+    ((srr / sw - mean * mean).max(0.0) * effective / (effective - FITTED_TERMS)).sqrt()
+}
+
+/// First-order correction of curvature at a projected point for the shrinkage of the MLS
+/// surface of scale `h`.
+///
+/// The MLS surface of a smooth sampled surface lies about `δ = (k1 + k2) h²/4` inside it
+/// (towards the centres of curvature; `docs/validation.md`), and the parallel surface at that
+/// distance has curvatures `k/(1 − kδ)`. Inverting, `k_true ≈ k/(1 + kδ)` with δ from the
+/// measured curvatures. Only for curvature at projected points: at the input points the level
+/// set through the point is not shrunk.
+pub fn correct_shrinkage(curvature: &Curvature, h: f64) -> Curvature {
+    let delta = 0.5 * curvature.mean * h * h;
+    let k1 = curvature.k1 / (1.0 + curvature.k1 * delta);
+    let k2 = curvature.k2 / (1.0 + curvature.k2 * delta);
+    Curvature {
+        k1,
+        k2,
+        mean: 0.5 * (k1 + k2),
+        gauss: k1 * k2,
+        ..*curvature
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A grid plane z = 0 with Gaussian noise in z, exact normals: all curvature is noise.
+    fn noisy_plane(n: usize, spacing: f64, sigma: f64, seed: u64) -> Vec<Point> {
+        // A small LCG + Box–Muller keeps the test free of extra dependencies.
+        let mut state = seed.wrapping_mul(6364136223846793005).wrapping_add(1);
+        let mut uniform = move || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((state >> 11) as f64 + 0.5) / (1u64 << 53) as f64
+        };
+        let mut out = Vec::with_capacity(n * n);
+        for i in 0..n {
+            for j in 0..n {
+                let g =
+                    (-2.0 * uniform().ln()).sqrt() * (2.0 * std::f64::consts::PI * uniform()).cos();
+                out.push(Point::new(
+                    i as f64 * spacing,
+                    j as f64 * spacing,
+                    sigma * g,
+                ));
+            }
+        }
+        out
+    }
+
+    #[test]
+    fn noise_gain_matches_a_noisy_plane() {
+        let (n, spacing, sigma) = (120, 1.0, 0.05);
+        let points = noisy_plane(n, spacing, sigma, 3);
+        let normals = vec![Vector::z(); points.len()];
+        let centre = 0.5 * (n - 1) as f64 * spacing;
+        for factor in [2.0, 3.0, 4.0] {
+            let h = factor * spacing;
+            let surface = MlsSurface::new(&points, &normals, MlsConfig::new(h)).unwrap();
+            let queries: Vec<Point> = points
+                .iter()
+                .filter(|p| (p.x - centre).abs().max((p.y - centre).abs()) < centre - 6.0 * h)
+                .copied()
+                .collect();
+            let mut ev = surface.evaluator();
+            let (mut sum_sq, mut predicted, mut noise) = (0.0, 0.0, 0.0);
+            for q in &queries {
+                let r = ev.curvature_at(q).unwrap();
+                // The mean curvature averages the two normal sections: per-section scatter
+                // is √2 times its own.
+                sum_sq += 2.0 * r.curvature.mean * r.curvature.mean;
+                let wsum = r.implicit.weight_sum * (-r.implicit.log_scale).exp();
+                predicted += 1.0 / (h * h * (2.0 * wsum).sqrt());
+                noise += residual_noise(&mut ev, q, &r.curvature, h);
+            }
+            let m = queries.len() as f64;
+            let gain = (sum_sq / m).sqrt() / (sigma * predicted / m);
+            assert!(
+                (gain / NOISE_GAIN - 1.0).abs() < 0.15,
+                "h = {factor} spacings: measured gain {gain}"
+            );
+            // The residual estimate recovers σ.
+            let estimated = noise / m;
+            assert!(
+                (estimated / sigma - 1.0).abs() < 0.05,
+                "h = {factor} spacings: σ estimated {estimated}, true {sigma}"
+            );
+        }
+    }
+}
