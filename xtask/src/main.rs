@@ -8,6 +8,11 @@ use anyhow::{Context, Result, bail};
 mod bench;
 mod defaults;
 mod faults;
+#[cfg_attr(
+    not(test),
+    expect(dead_code, reason = "used by cargo xtask paper, landing next")
+)]
+mod figures;
 mod robustness;
 mod validate;
 mod validate_shapes;

@@ -1,0 +1,1527 @@
+//! PNG figures for `cargo xtask paper`: values on a point cloud as shaded splats with a colour
+//! bar, and line charts.
+//!
+//! The splat renderer is our own (an orthographic z-buffer of screen-space discs) and writes
+//! straight into an RGB buffer; plotters then draws the text, tick marks and line charts into
+//! the same buffer, and the `png` crate encodes it, atomically. Text uses Ubuntu Light,
+//! compiled in from `epaint_default_fonts` and drawn with `ab_glyph`, so that building and
+//! running this needs no system font library.
+//!
+//! Set `FIGURES_TEST_DIR` when running the tests to keep their figures and look at them.
+
+use std::io::BufWriter;
+use std::num::NonZeroUsize;
+use std::path::Path;
+use std::sync::OnceLock;
+
+use ab_glyph::{Font, FontRef, ScaleFont};
+
+use anyhow::{Context, Result, anyhow, ensure};
+use kiddo::{ImmutableKdTree, SquaredEuclidean};
+use plotters::coord::Shift;
+use plotters::coord::ranged1d::{AsRangedCoord, ValueFormatter};
+use plotters::element::{Drawable, PointCollection};
+use plotters::prelude::*;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
+use plotters_backend::{BackendColor, BackendCoord, BackendTextStyle, DrawingErrorKind};
+
+/// The family name under which the compiled-in font is registered with plotters.
+const FONT: &str = "sans-serif";
+const TITLE_SIZE: f64 = 22.0;
+const PANEL_TITLE_SIZE: f64 = 18.0;
+const LABEL_SIZE: f64 = 15.0;
+const TICK_SIZE: f64 = 13.0;
+
+type Rgb = [u8; 3];
+const BACKGROUND: Rgb = [255, 255, 255];
+const INK: RGBColor = RGBColor(30, 30, 30);
+/// Colour of points without a value (NaN), drawn hatched so that it cannot pass for a value.
+const NO_VALUE: Rgb = [170, 170, 170];
+
+/// A fixed orthographic camera, z up.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct View {
+    /// Angle of the camera around the z axis, from +x towards +y.
+    pub azimuth_deg: f64,
+    /// Angle of the camera above the xy plane.
+    pub elevation_deg: f64,
+}
+
+impl View {
+    /// A three-quarter view from above that shows a sphere or a torus well.
+    pub(crate) const THREE_QUARTER: View = View {
+        azimuth_deg: -60.0,
+        elevation_deg: 30.0,
+    };
+}
+
+/// How values map to colours.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum ScaleKind {
+    /// Blue, white, red; white at 0 when `min < 0 < max`, else at the middle of the range.
+    /// For signed quantities: errors, curvature of either sign.
+    Diverging,
+    /// Viridis, dark blue to yellow. For quantities of one sign or without a natural zero.
+    Sequential,
+}
+
+/// The value range of a colour map and its legend label. Values outside the range take the
+/// colour of the nearer end.
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) struct ColourScale {
+    pub min: f64,
+    pub max: f64,
+    /// Shown under the colour bar, e.g. "k1 error".
+    pub label: String,
+    pub kind: ScaleKind,
+}
+
+impl ColourScale {
+    /// A sequential scale over the 2nd..98th percentile of the finite values, so that a few
+    /// outliers do not wash out the map. Falls back to [0, 1] without finite values.
+    pub(crate) fn robust_sequential(values: &[f64], label: &str) -> Self {
+        let (min, max) = match (percentile(values, 0.02), percentile(values, 0.98)) {
+            (Some(lo), Some(hi)) if hi > lo => (lo, hi),
+            // Constant data: a unit-wide range around it, so the map shows its middle colour.
+            (Some(v), Some(_)) => (v - 0.5, v + 0.5),
+            _ => (0.0, 1.0),
+        };
+        Self {
+            min,
+            max,
+            label: label.to_owned(),
+            kind: ScaleKind::Sequential,
+        }
+    }
+
+    /// A diverging scale symmetric around 0, out to the 98th percentile of `|value|`: for
+    /// errors and signed curvature. Falls back to [-1, 1] when every finite value is 0 or
+    /// there is none.
+    pub(crate) fn robust_symmetric(values: &[f64], label: &str) -> Self {
+        let magnitudes: Vec<f64> = values.iter().map(|v| v.abs()).collect();
+        let bound = percentile(&magnitudes, 0.98)
+            .filter(|&b| b > 0.0)
+            .unwrap_or(1.0);
+        Self {
+            min: -bound,
+            max: bound,
+            label: label.to_owned(),
+            kind: ScaleKind::Diverging,
+        }
+    }
+
+    fn check(&self) -> Result<()> {
+        ensure!(
+            self.min.is_finite() && self.max.is_finite() && self.min < self.max,
+            "colour scale `{}` needs finite min < max, got [{}, {}]",
+            self.label,
+            self.min,
+            self.max
+        );
+        Ok(())
+    }
+
+    /// The position of `value` along the colour map, in [0, 1].
+    fn position(&self, value: f64) -> f64 {
+        let t = match self.kind {
+            ScaleKind::Diverging if self.min < 0.0 && 0.0 < self.max => {
+                // Each side of zero has its own rate, so that zero is white.
+                if value < 0.0 {
+                    0.5 - 0.5 * value / self.min
+                } else {
+                    0.5 + 0.5 * value / self.max
+                }
+            }
+            _ => (value - self.min) / (self.max - self.min),
+        };
+        t.clamp(0.0, 1.0)
+    }
+
+    /// The colour of `value`; NaN has none.
+    fn colour(&self, value: f64) -> Option<Rgb> {
+        if value.is_nan() {
+            return None;
+        }
+        let stops = match self.kind {
+            ScaleKind::Diverging => &RDBU[..],
+            ScaleKind::Sequential => &VIRIDIS[..],
+        };
+        Some(interpolate(stops, self.position(value)))
+    }
+}
+
+/// ColorBrewer RdBu (9 classes), reversed so that low is blue.
+const RDBU: [Rgb; 9] = [
+    [0x21, 0x66, 0xac],
+    [0x43, 0x93, 0xc3],
+    [0x92, 0xc5, 0xde],
+    [0xd1, 0xe5, 0xf0],
+    [0xf7, 0xf7, 0xf7],
+    [0xfd, 0xdb, 0xc7],
+    [0xf4, 0xa5, 0x82],
+    [0xd6, 0x60, 0x4d],
+    [0xb2, 0x18, 0x2b],
+];
+
+/// Viridis at nine evenly spaced positions.
+const VIRIDIS: [Rgb; 9] = [
+    [0x44, 0x01, 0x54],
+    [0x47, 0x2d, 0x7b],
+    [0x3b, 0x52, 0x8b],
+    [0x2c, 0x72, 0x8e],
+    [0x21, 0x91, 0x8c],
+    [0x28, 0xae, 0x80],
+    [0x5e, 0xc9, 0x62],
+    [0xad, 0xdc, 0x30],
+    [0xfd, 0xe7, 0x25],
+];
+
+/// Piecewise-linear interpolation between evenly spaced colour stops, `t` in [0, 1].
+fn interpolate(stops: &[Rgb], t: f64) -> Rgb {
+    let x = t * (stops.len() - 1) as f64;
+    let i = (x.floor() as usize).min(stops.len() - 2);
+    let f = x - i as f64;
+    let (a, b) = (stops[i], stops[i + 1]);
+    std::array::from_fn(|c| (f64::from(a[c]) * (1.0 - f) + f64::from(b[c]) * f).round() as u8)
+}
+
+/// The `p`-quantile (0..=1) of the finite values, or None when there are none.
+fn percentile(values: &[f64], p: f64) -> Option<f64> {
+    let mut finite: Vec<f64> = values.iter().copied().filter(|v| v.is_finite()).collect();
+    if finite.is_empty() {
+        return None;
+    }
+    finite.sort_unstable_by(f64::total_cmp);
+    let x = p.clamp(0.0, 1.0) * (finite.len() - 1) as f64;
+    let (lo, hi) = (x.floor() as usize, x.ceil() as usize);
+    Some(finite[lo] + (finite[hi] - finite[lo]) * (x - lo as f64))
+}
+
+/// One named series of a line chart.
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) struct Series {
+    pub name: String,
+    pub points: Vec<(f64, f64)>,
+}
+
+/// A cloud to draw: positions, and normals (of either sign) for shading.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Cloud<'a> {
+    pub points: &'a [[f64; 3]],
+    /// One per point; None draws flat colours.
+    pub normals: Option<&'a [[f64; 3]]>,
+}
+
+/// One render of a figure with several: its title, one value per point, and their scale.
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) struct Panel {
+    pub title: String,
+    pub values: Vec<f64>,
+    pub scale: ColourScale,
+}
+
+/// An axis of a line chart.
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) struct Axis {
+    pub label: String,
+    /// Logarithmic; points at or below 0 are then left out.
+    pub log: bool,
+}
+
+impl Axis {
+    pub(crate) fn linear(label: &str) -> Self {
+        Self {
+            label: label.to_owned(),
+            log: false,
+        }
+    }
+
+    pub(crate) fn log(label: &str) -> Self {
+        Self {
+            label: label.to_owned(),
+            log: true,
+        }
+    }
+}
+
+/// Renders a cloud coloured by `values` (NaN: hatched grey, "no value") with a title and a
+/// colour bar, into a PNG of `size` pixels.
+///
+/// Orthographic projection along `view`, z-buffered discs sized from each point's distance to
+/// its neighbours so that a sampled surface looks closed, and Lambert shading from the normals
+/// when given, so that the shape reads at a glance.
+pub(crate) fn splat_png(
+    path: &Path,
+    title: &str,
+    cloud: Cloud<'_>,
+    values: &[f64],
+    scale: &ColourScale,
+    view: View,
+    size: (u32, u32),
+) -> Result<()> {
+    let panel = PanelRef {
+        title: "",
+        values,
+        scale,
+    };
+    let splats = Splats::new(cloud).with_context(|| format!("cannot draw {}", path.display()))?;
+    render_panels(path, title, &splats, &[panel], view, size)
+}
+
+/// Several renders of one cloud side by side in one PNG, sharing the view: for instance k1, k2
+/// and their errors. Each panel gets its own title and colour bar; `panel_size` is the size of
+/// one panel, and the figure's title band comes out of it.
+pub(crate) fn splat_panels_png(
+    path: &Path,
+    title: &str,
+    cloud: Cloud<'_>,
+    panels: &[Panel],
+    view: View,
+    panel_size: (u32, u32),
+) -> Result<()> {
+    ensure!(
+        !panels.is_empty(),
+        "no panels to draw in {}",
+        path.display()
+    );
+    let splats = Splats::new(cloud).with_context(|| format!("cannot draw {}", path.display()))?;
+    let panels: Vec<PanelRef<'_>> = panels
+        .iter()
+        .map(|p| PanelRef {
+            title: &p.title,
+            values: &p.values,
+            scale: &p.scale,
+        })
+        .collect();
+    let width = panel_size
+        .0
+        .checked_mul(panels.len() as u32)
+        .context("figure too wide")?;
+    render_panels(path, title, &splats, &panels, view, (width, panel_size.1))
+}
+
+/// A line chart of several series with markers, axis labels and a legend: for instance error
+/// against sampling density. Points that cannot be drawn (NaN, or not positive on a log axis)
+/// are left out.
+pub(crate) fn line_chart_png(
+    path: &Path,
+    title: &str,
+    x_axis: &Axis,
+    y_axis: &Axis,
+    series: &[Series],
+    size: (u32, u32),
+) -> Result<()> {
+    let (log_x, log_y) = (x_axis.log, y_axis.log);
+    let (x_label, y_label) = (x_axis.label.as_str(), y_axis.label.as_str());
+    let drawable = |v: f64, log: bool| v.is_finite() && (!log || v > 0.0);
+    let series: Vec<Series> = series
+        .iter()
+        .map(|s| Series {
+            name: s.name.clone(),
+            points: s
+                .points
+                .iter()
+                .copied()
+                .filter(|&(x, y)| drawable(x, log_x) && drawable(y, log_y))
+                .collect(),
+        })
+        .collect();
+    let all = || series.iter().flat_map(|s| s.points.iter().copied());
+    ensure!(
+        all().next().is_some(),
+        "no drawable points for the chart {}",
+        path.display()
+    );
+    let x = axis_range(all().map(|p| p.0), log_x);
+    let y = axis_range(all().map(|p| p.1), log_y);
+
+    let mut canvas = Canvas::new(size)?;
+    {
+        let root = canvas.drawing_area()?;
+        let labels = (title, x_label, y_label);
+        let result = match (log_x, log_y) {
+            (false, false) => draw_chart(&root, labels, &series, x.0..x.1, y.0..y.1),
+            (true, false) => draw_chart(&root, labels, &series, (x.0..x.1).log_scale(), y.0..y.1),
+            (false, true) => draw_chart(&root, labels, &series, x.0..x.1, (y.0..y.1).log_scale()),
+            (true, true) => draw_chart(
+                &root,
+                labels,
+                &series,
+                (x.0..x.1).log_scale(),
+                (y.0..y.1).log_scale(),
+            ),
+        };
+        result.with_context(|| format!("cannot draw the chart {}", path.display()))?;
+        root.present().map_err(plotting_error)?;
+    }
+    canvas.write_png(path)
+}
+
+/// The data range with a margin: 5 % of the span on a linear axis, a factor 1.25 on a log one.
+fn axis_range(values: impl Iterator<Item = f64>, log: bool) -> (f64, f64) {
+    let (lo, hi) = values.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+        (lo.min(v), hi.max(v))
+    });
+    if log {
+        let (lo, hi) = if hi > lo {
+            (lo, hi)
+        } else {
+            (lo / 2.0, hi * 2.0)
+        };
+        (lo / 1.25, hi * 1.25)
+    } else {
+        let pad = if hi > lo {
+            0.05 * (hi - lo)
+        } else {
+            1.0_f64.max(lo.abs())
+        };
+        (lo - pad, hi + pad)
+    }
+}
+
+/// Okabe–Ito colours, distinguishable with the common colour-vision deficiencies.
+const SERIES_COLOURS: [RGBColor; 7] = [
+    RGBColor(0x00, 0x72, 0xb2),
+    RGBColor(0xd5, 0x5e, 0x00),
+    RGBColor(0x00, 0x9e, 0x73),
+    RGBColor(0xcc, 0x79, 0xa7),
+    RGBColor(0xe6, 0x9f, 0x00),
+    RGBColor(0x56, 0xb4, 0xe9),
+    RGBColor(0x00, 0x00, 0x00),
+];
+
+fn draw_chart<X, Y>(
+    root: &DrawingArea<Backend<'_>, Shift>,
+    (title, x_label, y_label): (&str, &str, &str),
+    series: &[Series],
+    x_range: X,
+    y_range: Y,
+) -> Result<()>
+where
+    X: AsRangedCoord<Value = f64>,
+    Y: AsRangedCoord<Value = f64>,
+    X::CoordDescType: ValueFormatter<f64>,
+    Y::CoordDescType: ValueFormatter<f64>,
+{
+    let mut chart = ChartBuilder::on(root)
+        .caption(title, (FONT, TITLE_SIZE).into_font().color(&INK))
+        .margin(16)
+        .x_label_area_size(48)
+        .y_label_area_size(72)
+        .build_cartesian_2d(x_range, y_range)
+        .map_err(plotting_error)?;
+    chart
+        .configure_mesh()
+        .x_desc(x_label)
+        .y_desc(y_label)
+        .axis_desc_style((FONT, LABEL_SIZE).into_font().color(&INK))
+        .label_style((FONT, TICK_SIZE).into_font().color(&INK))
+        .x_label_formatter(&|v| format_number(*v))
+        .y_label_formatter(&|v| format_number(*v))
+        .light_line_style(RGBColor(240, 240, 240))
+        .bold_line_style(RGBColor(210, 210, 210))
+        .draw()
+        .map_err(plotting_error)?;
+    for (i, s) in series.iter().enumerate() {
+        let colour = SERIES_COLOURS[i % SERIES_COLOURS.len()];
+        let line = colour.stroke_width(2);
+        chart
+            .draw_series(LineSeries::new(s.points.iter().copied(), line))
+            .map_err(plotting_error)?
+            .label(s.name.as_str())
+            .legend(move |(x, y)| {
+                EmptyElement::at((x, y))
+                    + PathElement::new(vec![(-12, 0), (12, 0)], line)
+                    + Marker {
+                        at: (0, 0),
+                        series: i,
+                        colour,
+                    }
+            });
+        chart
+            .draw_series(s.points.iter().map(|&at| Marker {
+                at,
+                series: i,
+                colour,
+            }))
+            .map_err(plotting_error)?;
+    }
+    chart
+        .configure_series_labels()
+        .label_font((FONT, LABEL_SIZE).into_font().color(&INK))
+        .background_style(WHITE.mix(0.85))
+        .border_style(RGBColor(160, 160, 160))
+        .position(SeriesLabelPosition::UpperRight)
+        .draw()
+        .map_err(plotting_error)?;
+    Ok(())
+}
+
+/// The marker of a series at one point: circle, triangle, square, cross, then again.
+///
+/// Our own element rather than plotters' `DynElement`, which only works with a `'static`
+/// backend, and a bitmap backend over a buffer is not.
+struct Marker<C> {
+    at: C,
+    series: usize,
+    colour: RGBColor,
+}
+
+impl<'a, C: 'a> PointCollection<'a, C> for &'a Marker<C> {
+    type Point = &'a C;
+    type IntoIter = std::iter::Once<&'a C>;
+    fn point_iter(self) -> Self::IntoIter {
+        std::iter::once(&self.at)
+    }
+}
+
+impl<C, DB: DrawingBackend> Drawable<DB> for Marker<C> {
+    fn draw<I: Iterator<Item = BackendCoord>>(
+        &self,
+        mut points: I,
+        backend: &mut DB,
+        _: (u32, u32),
+    ) -> Result<(), DrawingErrorKind<DB::ErrorType>> {
+        let Some((x, y)) = points.next() else {
+            return Ok(());
+        };
+        let fill = self.colour.filled();
+        match self.series % 4 {
+            0 => backend.draw_circle((x, y), 4, &fill, true),
+            1 => backend.fill_polygon([(x, y - 6), (x - 6, y + 4), (x + 6, y + 4)], &fill),
+            2 => backend.draw_rect((x - 4, y - 4), (x + 4, y + 4), &fill, true),
+            _ => {
+                let stroke = self.colour.stroke_width(2);
+                backend.draw_line((x - 5, y - 5), (x + 5, y + 5), &stroke)?;
+                backend.draw_line((x - 5, y + 5), (x + 5, y - 5), &stroke)
+            }
+        }
+    }
+}
+
+/// A tick label: plain with few digits, or in `1e-5` form for very small or large numbers.
+fn format_number(v: f64) -> String {
+    let a = v.abs();
+    if a == 0.0 {
+        "0".to_owned()
+    } else if !(1e-3..1e5).contains(&a) {
+        let s = format!("{v:.1e}");
+        s.replace(".0e", "e")
+    } else {
+        let s = format!("{v:.4}");
+        s.trim_end_matches('0').trim_end_matches('.').to_owned()
+    }
+}
+
+/// Plotters errors borrow the backend, so they become messages here.
+fn plotting_error(e: impl std::fmt::Display) -> anyhow::Error {
+    anyhow!("plotting: {e}")
+}
+
+// ---------------------------------------------------------------------------------------------
+// Splats.
+
+/// A cloud with the world-space size of each point's disc, shared by all panels of a figure.
+struct Splats<'a> {
+    cloud: Cloud<'a>,
+    /// Distance from each point to its [`SPLAT_NEIGHBOURS`]-th nearest neighbour, kept within
+    /// a factor 2 of the median; NaN for points with a non-finite coordinate, and all NaN when
+    /// the cloud has no extent.
+    reach: Vec<f64>,
+}
+
+/// Neighbours per point for the disc size: the 4th neighbour lies one pitch away on square
+/// and hexagonal grids, and a little further where random sampling left a gap.
+const SPLAT_NEIGHBOURS: usize = 4;
+
+impl<'a> Splats<'a> {
+    fn new(cloud: Cloud<'a>) -> Result<Self> {
+        let Cloud { points, normals } = cloud;
+        let finite: Vec<usize> = (0..points.len())
+            .filter(|&i| points[i].iter().all(|c| c.is_finite()))
+            .collect();
+        ensure!(
+            !finite.is_empty(),
+            "no points with finite coordinates to draw"
+        );
+        if let Some(n) = normals {
+            ensure!(
+                n.len() == points.len(),
+                "{} normals for {} points",
+                n.len(),
+                points.len()
+            );
+        }
+        let coords: Vec<[f64; 3]> = finite.iter().map(|&i| points[i]).collect();
+        let tree = ImmutableKdTree::<f64, 3>::new_from_slice(&coords)
+            .map_err(|_| anyhow!("too many points ({}) for the k-d tree", coords.len()))?;
+        // The point itself comes first, at distance 0.
+        let wanted = NonZeroUsize::new(SPLAT_NEIGHBOURS + 1).context("neighbour count")?;
+        let kth: Vec<f64> = coords
+            .iter()
+            .map(|p| {
+                let hits = tree
+                    .query(p)
+                    .nearest_n::<SquaredEuclidean<f64>>(wanted)
+                    .execute();
+                hits.iter().map(|h| h.distance).fold(0.0, f64::max).sqrt()
+            })
+            .collect();
+        let median = percentile(&kth, 0.5).unwrap_or(0.0);
+        let mut reach = vec![f64::NAN; points.len()];
+        if median > 0.0 {
+            // Bounded so that a lone outlier does not become a blot, nor a duplicate vanish.
+            for (&i, &d) in finite.iter().zip(&kth) {
+                reach[i] = d.clamp(0.5 * median, 2.0 * median);
+            }
+        }
+        Ok(Self { cloud, reach })
+    }
+}
+
+/// A panel with borrowed data.
+struct PanelRef<'a> {
+    title: &'a str,
+    values: &'a [f64],
+    scale: &'a ColourScale,
+}
+
+/// Height of the figure title band; none when the title is empty.
+const TITLE_BAND: u32 = 40;
+/// Height of the panel title band; none when the panel title is empty.
+const PANEL_TITLE_BAND: u32 = 30;
+/// Height of the colour-bar band under each render.
+const LEGEND_BAND: u32 = 78;
+/// Disc radius as a multiple of the distance to the [`SPLAT_NEIGHBOURS`]-th neighbour: enough
+/// to close the diagonal gaps of a square grid (0.71) and most gaps of random sampling.
+const SPLAT_RADIUS: f64 = 1.0;
+
+fn render_panels(
+    path: &Path,
+    title: &str,
+    cloud: &Splats<'_>,
+    panels: &[PanelRef<'_>],
+    view: View,
+    size: (u32, u32),
+) -> Result<()> {
+    let context = || format!("cannot draw {}", path.display());
+    for panel in panels {
+        ensure!(
+            panel.values.len() == cloud.cloud.points.len(),
+            "panel `{}`: {} values for {} points ({})",
+            panel.title,
+            panel.values.len(),
+            cloud.cloud.points.len(),
+            path.display()
+        );
+        panel.scale.check().with_context(context)?;
+    }
+    let title_band = if title.is_empty() { 0 } else { TITLE_BAND };
+    let panel_width = size.0 / panels.len() as u32;
+    let mut canvas = Canvas::new(size)?;
+    let mut layouts = Vec::with_capacity(panels.len());
+    for (i, panel) in panels.iter().enumerate() {
+        let x0 = i as u32 * panel_width;
+        let layout = PanelLayout::new(x0, title_band, panel_width, size.1, panel.title)
+            .with_context(|| format!("{} is too small for its panels", path.display()))?;
+        let colours: Vec<Option<Rgb>> = panel
+            .values
+            .iter()
+            .map(|&v| panel.scale.colour(v))
+            .collect();
+        canvas.splat(layout.render, cloud, &colours, view);
+        canvas.colour_bar(layout.bar, panel.scale);
+        if panel.values.iter().any(|v| v.is_nan()) {
+            canvas.no_value_swatch(layout.bar);
+        }
+        layouts.push(layout);
+    }
+    {
+        let root = canvas.drawing_area()?;
+        if title_band > 0 {
+            let style = text_style(TITLE_SIZE, HPos::Center, VPos::Center);
+            root.draw_text(title, &style, (size.0 as i32 / 2, title_band as i32 / 2))
+                .map_err(plotting_error)
+                .with_context(context)?;
+        }
+        for (panel, layout) in panels.iter().zip(&layouts) {
+            let has_nan = panel.values.iter().any(|v| v.is_nan());
+            draw_panel_text(&root, panel, layout, has_nan).with_context(context)?;
+        }
+        root.present().map_err(plotting_error)?;
+    }
+    canvas.write_png(path)
+}
+
+/// A rectangle in pixels: left, top, width, height.
+#[derive(Clone, Copy, Debug)]
+struct Rect {
+    x: i64,
+    y: i64,
+    w: i64,
+    h: i64,
+}
+
+/// Where the parts of one panel go.
+struct PanelLayout {
+    /// Centre of the panel title, when there is one.
+    title_at: Option<(i32, i32)>,
+    render: Rect,
+    bar: Rect,
+}
+
+impl PanelLayout {
+    fn new(x0: u32, top: u32, width: u32, bottom: u32, title: &str) -> Result<Self> {
+        let title_band = if title.is_empty() {
+            0
+        } else {
+            PANEL_TITLE_BAND
+        };
+        let render_top = top + title_band;
+        let legend_top = bottom
+            .checked_sub(LEGEND_BAND)
+            .filter(|&t| t >= render_top + 50 && width >= 120)
+            .context("a panel needs at least 120 px width and 50 px for the render")?;
+        let (x0, width) = (i64::from(x0), i64::from(width));
+        // The bar spans 70 % of the panel width, and leaves room for the "no value" swatch
+        // and its label after it.
+        const SWATCH: i64 = 80;
+        let bar_width = (width * 7 / 10).min(width - SWATCH - 50);
+        Ok(Self {
+            title_at: (title_band > 0)
+                .then(|| ((x0 + width / 2) as i32, (top + title_band / 2) as i32)),
+            render: Rect {
+                x: x0,
+                y: i64::from(render_top),
+                w: width,
+                h: i64::from(legend_top - render_top),
+            },
+            bar: Rect {
+                x: x0 + (width - bar_width - SWATCH) / 2,
+                y: i64::from(legend_top) + 8,
+                w: bar_width,
+                h: 14,
+            },
+        })
+    }
+}
+
+fn text_style(size: f64, h: HPos, v: VPos) -> TextStyle<'static> {
+    (FONT, size).into_font().color(&INK).pos(Pos::new(h, v))
+}
+
+/// Panel title, colour-bar frame, ticks, label and the "no value" swatch.
+fn draw_panel_text(
+    root: &DrawingArea<Backend<'_>, Shift>,
+    panel: &PanelRef<'_>,
+    layout: &PanelLayout,
+    has_nan: bool,
+) -> Result<()> {
+    if let Some(at) = layout.title_at {
+        let style = text_style(PANEL_TITLE_SIZE, HPos::Center, VPos::Center);
+        root.draw_text(panel.title, &style, at)
+            .map_err(plotting_error)?;
+    }
+    let bar = layout.bar;
+    let (left, top, right, bottom) = (
+        bar.x as i32,
+        bar.y as i32,
+        (bar.x + bar.w) as i32,
+        (bar.y + bar.h) as i32,
+    );
+    root.draw(&Rectangle::new([(left - 1, top - 1), (right, bottom)], INK))
+        .map_err(plotting_error)?;
+
+    let scale = panel.scale;
+    let ticks = Ticks::new(scale.min, scale.max);
+    let tick_style = text_style(TICK_SIZE, HPos::Center, VPos::Top);
+    for &value in &ticks.values {
+        let x = left
+            + ((value - scale.min) / (scale.max - scale.min) * f64::from(right - left)).round()
+                as i32;
+        root.draw(&PathElement::new(vec![(x, bottom), (x, bottom + 4)], INK))
+            .map_err(plotting_error)?;
+        root.draw_text(&ticks.label(value), &tick_style, (x, bottom + 7))
+            .map_err(plotting_error)?;
+    }
+    let label = match ticks.exponent {
+        0 => scale.label.clone(),
+        e => format!("{} (×1e{e})", scale.label),
+    };
+    let label_style = text_style(LABEL_SIZE, HPos::Center, VPos::Top);
+    root.draw_text(&label, &label_style, ((left + right) / 2, bottom + 27))
+        .map_err(plotting_error)?;
+
+    if has_nan {
+        let x = right + 14;
+        root.draw(&Rectangle::new([(x - 1, top - 1), (x + 14, bottom)], INK))
+            .map_err(plotting_error)?;
+        let style = text_style(TICK_SIZE, HPos::Left, VPos::Center);
+        root.draw_text("no value", &style, (x + 19, (top + bottom) / 2))
+            .map_err(plotting_error)?;
+    }
+    Ok(())
+}
+
+/// About five round tick values (1, 2 or 5 × 10^k apart) inside [min, max], labelled with a
+/// common power of ten factored out when the numbers are very small or large.
+struct Ticks {
+    values: Vec<f64>,
+    step: f64,
+    /// The labels show `value / 10^exponent`.
+    exponent: i32,
+}
+
+impl Ticks {
+    fn new(min: f64, max: f64) -> Self {
+        let raw = (max - min) / 5.0;
+        let magnitude = 10f64.powf(raw.log10().floor());
+        let step = [1.0, 2.0, 5.0, 10.0]
+            .into_iter()
+            .map(|m| m * magnitude)
+            // The tolerance keeps a span of exactly 5 steps (up to rounding) at 5 steps.
+            .find(|&s| s >= raw * (1.0 - 1e-9))
+            .unwrap_or(10.0 * magnitude);
+        let first = (min / step).ceil() as i64;
+        let last = (max / step).floor() as i64;
+        let values = (first..=last).map(|k| k as f64 * step).collect();
+        let largest = min.abs().max(max.abs());
+        let exponent = if (1e-2..1e4).contains(&largest) {
+            0
+        } else {
+            largest.log10().floor() as i32
+        };
+        Self {
+            values,
+            step,
+            exponent,
+        }
+    }
+
+    fn label(&self, value: f64) -> String {
+        let scaled_step = self.step / 10f64.powi(self.exponent);
+        let decimals = (-scaled_step.log10().floor()).max(0.0) as usize;
+        let v = value / 10f64.powi(self.exponent);
+        // Avoid "-0".
+        let v = if v.abs() < scaled_step * 1e-6 { 0.0 } else { v };
+        format!("{v:.decimals$}")
+    }
+}
+
+/// An RGB image in memory: the splats are drawn into it directly, text through plotters.
+struct Canvas {
+    width: u32,
+    height: u32,
+    rgb: Vec<u8>,
+}
+
+impl Canvas {
+    fn new((width, height): (u32, u32)) -> Result<Self> {
+        ensure!(width > 0 && height > 0, "empty image size {width}×{height}");
+        let pixels = width as usize * height as usize;
+        Ok(Self {
+            width,
+            height,
+            rgb: BACKGROUND.repeat(pixels),
+        })
+    }
+
+    fn drawing_area(&mut self) -> Result<DrawingArea<Backend<'_>, Shift>> {
+        register_font()?;
+        let inner = BitMapBackend::with_buffer_and_format(&mut self.rgb, (self.width, self.height))
+            .map_err(plotting_error)?;
+        let font =
+            FontRef::try_from_slice(FONT_BYTES).context("the compiled-in font does not parse")?;
+        Ok(Backend { inner, font }.into_drawing_area())
+    }
+
+    fn set(&mut self, x: i64, y: i64, colour: Rgb) {
+        if (0..i64::from(self.width)).contains(&x) && (0..i64::from(self.height)).contains(&y) {
+            let i = 3 * (y as usize * self.width as usize + x as usize);
+            self.rgb[i..i + 3].copy_from_slice(&colour);
+        }
+    }
+
+    /// Draws the cloud into `rect`, scaled to fit, each point a disc of its colour.
+    fn splat(&mut self, rect: Rect, cloud: &Splats<'_>, colours: &[Option<Rgb>], view: View) {
+        let camera = Camera::new(view);
+        let projected: Vec<Option<[f64; 3]>> = cloud
+            .cloud
+            .points
+            .iter()
+            .map(|p| p.iter().all(|c| c.is_finite()).then(|| camera.project(p)))
+            .collect();
+        let Some(fit) = Fit::new(rect, &projected, percentile(&cloud.reach, 0.5)) else {
+            return;
+        };
+        let (w, h) = (rect.w as usize, rect.h as usize);
+        let mut depth = vec![f64::NEG_INFINITY; w * h];
+        for (i, q) in projected.iter().enumerate() {
+            let Some(q) = q else { continue };
+            let (cx, cy) = fit.pixel(q);
+            let radius = fit.radius(cloud.reach[i]);
+            let reach = radius.ceil() as i64;
+            let shade = cloud
+                .cloud
+                .normals
+                .map_or(1.0, |normals| camera.shade(&normals[i]));
+            let base = colours[i].unwrap_or(NO_VALUE);
+            let lit: Rgb = std::array::from_fn(|c| (f64::from(base[c]) * shade).round() as u8);
+            let (px, py) = (cx.floor() as i64, cy.floor() as i64);
+            for y in (py - reach).max(0)..=(py + reach).min(rect.h - 1) {
+                for x in (px - reach).max(0)..=(px + reach).min(rect.w - 1) {
+                    let (dx, dy) = (x as f64 + 0.5 - cx, y as f64 + 0.5 - cy);
+                    let d2 = dx * dx + dy * dy;
+                    if d2 > radius * radius {
+                        continue;
+                    }
+                    // A sphere rather than a flat disc, so that overlapping neighbours meet
+                    // along a line between them instead of one covering the other.
+                    let z = q[2] + (radius * radius - d2).sqrt() / fit.scale;
+                    let k = y as usize * w + x as usize;
+                    if z > depth[k] {
+                        depth[k] = z;
+                        // Hatch the points without a value, so that grey cannot pass for a value.
+                        let hatch = colours[i].is_none() && (rect.x + x + rect.y + y) % 6 < 2;
+                        let colour = if hatch { lit.map(|c| c / 2 + 20) } else { lit };
+                        self.set(rect.x + x, rect.y + y, colour);
+                    }
+                }
+            }
+        }
+    }
+
+    /// Fills `rect` with the colour map from `scale.min` (left) to `scale.max` (right).
+    fn colour_bar(&mut self, rect: Rect, scale: &ColourScale) {
+        for x in 0..rect.w {
+            let value = scale.min + (scale.max - scale.min) * (x as f64 + 0.5) / rect.w as f64;
+            let colour = scale.colour(value).unwrap_or(NO_VALUE);
+            for y in 0..rect.h {
+                self.set(rect.x + x, rect.y + y, colour);
+            }
+        }
+    }
+
+    /// Fills the "no value" swatch right of the bar.
+    fn no_value_swatch(&mut self, bar: Rect) {
+        let x0 = bar.x + bar.w + 14;
+        for y in 0..bar.h {
+            for x in 0..14 {
+                let hatch = (x0 + x + bar.y + y) % 6 < 2;
+                let colour = if hatch {
+                    NO_VALUE.map(|c| c / 2 + 20)
+                } else {
+                    NO_VALUE
+                };
+                self.set(x0 + x, bar.y + y, colour);
+            }
+        }
+    }
+
+    /// Writes the image as a PNG, atomically: into a temporary file beside `path`, then
+    /// renamed over it.
+    fn write_png(&self, path: &Path) -> Result<()> {
+        let context = || format!("cannot write {}", path.display());
+        let dir = match path.parent() {
+            Some(dir) if !dir.as_os_str().is_empty() => dir,
+            _ => Path::new("."),
+        };
+        let mut builder = tempfile::Builder::new();
+        // Readable by all like any other output file, not private as temporary files are.
+        #[cfg(unix)]
+        builder.permissions(std::os::unix::fs::PermissionsExt::from_mode(0o644));
+        let mut file = builder
+            .prefix(".figure-")
+            .suffix(".png.tmp")
+            .tempfile_in(dir)
+            .with_context(context)?;
+        let mut encoder =
+            png::Encoder::new(BufWriter::new(file.as_file_mut()), self.width, self.height);
+        encoder.set_color(png::ColorType::Rgb);
+        encoder.set_depth(png::BitDepth::Eight);
+        encoder.set_compression(png::Compression::High);
+        let mut writer = encoder.write_header().with_context(context)?;
+        writer.write_image_data(&self.rgb).with_context(context)?;
+        writer.finish().with_context(context)?;
+        file.persist(path).with_context(context)?;
+        Ok(())
+    }
+}
+
+/// The orthonormal frame of a [`View`]: screen right, screen up, and towards the camera.
+struct Camera {
+    right: [f64; 3],
+    up: [f64; 3],
+    toward: [f64; 3],
+    /// Direction towards the light: from the camera's upper left.
+    light: [f64; 3],
+}
+
+fn dot(a: &[f64; 3], b: &[f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+impl Camera {
+    fn new(view: View) -> Self {
+        let (sa, ca) = view.azimuth_deg.to_radians().sin_cos();
+        let (se, ce) = view.elevation_deg.to_radians().sin_cos();
+        let right = [-sa, ca, 0.0];
+        let up = [-se * ca, -se * sa, ce];
+        let toward = [ce * ca, ce * sa, se];
+        let l: [f64; 3] = std::array::from_fn(|i| toward[i] + 0.6 * up[i] - 0.4 * right[i]);
+        let norm = dot(&l, &l).sqrt();
+        Self {
+            right,
+            up,
+            toward,
+            light: l.map(|c| c / norm),
+        }
+    }
+
+    /// Screen x, screen y and depth (larger is nearer the camera), in world units.
+    fn project(&self, p: &[f64; 3]) -> [f64; 3] {
+        [dot(p, &self.right), dot(p, &self.up), dot(p, &self.toward)]
+    }
+
+    /// Brightness factor from a normal of either sign; 1 when the normal is unusable.
+    fn shade(&self, normal: &[f64; 3]) -> f64 {
+        const AMBIENT: f64 = 0.4;
+        let length = dot(normal, normal).sqrt();
+        let lambert = dot(normal, &self.light).abs() / length;
+        if lambert.is_finite() {
+            AMBIENT + (1.0 - AMBIENT) * lambert.min(1.0)
+        } else {
+            1.0
+        }
+    }
+}
+
+/// Scale and offset that fit the projected cloud into a rectangle.
+struct Fit {
+    /// Pixels per world unit.
+    scale: f64,
+    centre: (f64, f64),
+    half: (f64, f64),
+    /// Largest disc radius in pixels.
+    max_radius: f64,
+}
+
+impl Fit {
+    /// `reach` is the typical disc size in world units, None when unknown.
+    fn new(rect: Rect, projected: &[Option<[f64; 3]>], reach: Option<f64>) -> Option<Self> {
+        let mut lo = [f64::INFINITY; 2];
+        let mut hi = [f64::NEG_INFINITY; 2];
+        for q in projected.iter().flatten() {
+            for c in 0..2 {
+                lo[c] = lo[c].min(q[c]);
+                hi[c] = hi[c].max(q[c]);
+            }
+        }
+        if !(lo[0] <= hi[0]) {
+            return None;
+        }
+        const PAD: f64 = 8.0;
+        let (w, h) = (rect.w as f64, rect.h as f64);
+        let max_radius = w.min(h) / 4.0;
+        let fit =
+            |pad: f64| ((w - 2.0 * pad) / (hi[0] - lo[0])).min((h - 2.0 * pad) / (hi[1] - lo[1]));
+        // The margin depends on the disc size and the disc size on the scale: one round of each.
+        let scale = fit(PAD);
+        let scale = match reach {
+            Some(r) if scale.is_finite() => fit(PAD + (SPLAT_RADIUS * r * scale).min(max_radius)),
+            Some(_) | None if scale.is_finite() => scale,
+            // All points project to one place: no extent to fit, any scale does.
+            _ => 1.0,
+        };
+        Some(Self {
+            scale,
+            centre: ((lo[0] + hi[0]) / 2.0, (lo[1] + hi[1]) / 2.0),
+            half: (w / 2.0, h / 2.0),
+            max_radius,
+        })
+    }
+
+    /// Disc radius in pixels for a point whose disc reaches `reach` world units (NaN: 3 px).
+    fn radius(&self, reach: f64) -> f64 {
+        let r = SPLAT_RADIUS * reach * self.scale;
+        if r.is_finite() {
+            r.clamp(1.0, self.max_radius)
+        } else {
+            3.0
+        }
+    }
+
+    /// Position in the rectangle, in pixels (y down).
+    fn pixel(&self, q: &[f64; 3]) -> (f64, f64) {
+        (
+            self.half.0 + (q[0] - self.centre.0) * self.scale,
+            self.half.1 - (q[1] - self.centre.1) * self.scale,
+        )
+    }
+}
+
+/// The font: Ubuntu Light, from `epaint_default_fonts`.
+const FONT_BYTES: &[u8] = epaint_default_fonts::UBUNTU_LIGHT;
+
+/// Registers the compiled-in font with plotters, once: plotters measures text with it when it
+/// lays out a chart.
+fn register_font() -> Result<()> {
+    static REGISTERED: OnceLock<bool> = OnceLock::new();
+    let ok = *REGISTERED.get_or_init(|| {
+        plotters::style::register_font(FONT, FontStyle::Normal, FONT_BYTES).is_ok()
+    });
+    ensure!(ok, "the compiled-in font does not parse");
+    Ok(())
+}
+
+/// The bitmap backend with our own text drawing.
+///
+/// plotters 0.3.7 draws `ab_glyph` text without each glyph's side bearing, which spaces the
+/// letters unevenly ("ag ainst"); this draws every glyph at its pen position plus its bearing.
+/// Everything else goes to the bitmap backend.
+struct Backend<'a> {
+    inner: BitMapBackend<'a>,
+    font: FontRef<'static>,
+}
+
+type BackendResult<E> = Result<(), DrawingErrorKind<E>>;
+
+impl Backend<'_> {
+    /// Width and height of `text` at `size` pixels: the advances with kerning, and the line
+    /// height.
+    fn text_extent(&self, text: &str, size: f64) -> (f32, f32) {
+        let font = self.font.as_scaled(size as f32);
+        let mut width = 0.0;
+        let mut previous = None;
+        for c in text.chars() {
+            let id = font.glyph_id(c);
+            if let Some(p) = previous {
+                width += font.kern(p, id);
+            }
+            width += font.h_advance(id);
+            previous = Some(id);
+        }
+        (width, font.ascent() - font.descent())
+    }
+}
+
+impl DrawingBackend for Backend<'_> {
+    type ErrorType = <BitMapBackend<'static> as DrawingBackend>::ErrorType;
+
+    fn get_size(&self) -> (u32, u32) {
+        self.inner.get_size()
+    }
+
+    fn ensure_prepared(&mut self) -> BackendResult<Self::ErrorType> {
+        self.inner.ensure_prepared()
+    }
+
+    fn present(&mut self) -> BackendResult<Self::ErrorType> {
+        self.inner.present()
+    }
+
+    fn draw_pixel(
+        &mut self,
+        at: BackendCoord,
+        colour: BackendColor,
+    ) -> BackendResult<Self::ErrorType> {
+        self.inner.draw_pixel(at, colour)
+    }
+
+    fn draw_line<S: plotters_backend::BackendStyle>(
+        &mut self,
+        from: BackendCoord,
+        to: BackendCoord,
+        style: &S,
+    ) -> BackendResult<Self::ErrorType> {
+        self.inner.draw_line(from, to, style)
+    }
+
+    fn draw_rect<S: plotters_backend::BackendStyle>(
+        &mut self,
+        upper_left: BackendCoord,
+        bottom_right: BackendCoord,
+        style: &S,
+        fill: bool,
+    ) -> BackendResult<Self::ErrorType> {
+        self.inner.draw_rect(upper_left, bottom_right, style, fill)
+    }
+
+    fn draw_path<S: plotters_backend::BackendStyle, I: IntoIterator<Item = BackendCoord>>(
+        &mut self,
+        path: I,
+        style: &S,
+    ) -> BackendResult<Self::ErrorType> {
+        self.inner.draw_path(path, style)
+    }
+
+    fn draw_circle<S: plotters_backend::BackendStyle>(
+        &mut self,
+        centre: BackendCoord,
+        radius: u32,
+        style: &S,
+        fill: bool,
+    ) -> BackendResult<Self::ErrorType> {
+        self.inner.draw_circle(centre, radius, style, fill)
+    }
+
+    fn fill_polygon<S: plotters_backend::BackendStyle, I: IntoIterator<Item = BackendCoord>>(
+        &mut self,
+        vertices: I,
+        style: &S,
+    ) -> BackendResult<Self::ErrorType> {
+        self.inner.fill_polygon(vertices, style)
+    }
+
+    fn draw_text<S: BackendTextStyle>(
+        &mut self,
+        text: &str,
+        style: &S,
+        pos: BackendCoord,
+    ) -> BackendResult<Self::ErrorType> {
+        let colour = style.color();
+        let (width, height) = self.text_extent(text, style.size());
+        let dx = match style.anchor().h_pos {
+            HPos::Left => 0.0,
+            HPos::Center => -width / 2.0,
+            HPos::Right => -width,
+        };
+        let dy = match style.anchor().v_pos {
+            VPos::Top => 0.0,
+            VPos::Center => -height / 2.0,
+            VPos::Bottom => -height,
+        };
+        let font = self.font.as_scaled(style.size() as f32);
+        let transform = style.transform();
+        let mut pen = dx;
+        let mut previous = None;
+        let mut coverage = Vec::new();
+        for c in text.chars() {
+            let id = font.glyph_id(c);
+            if let Some(p) = previous {
+                pen += font.kern(p, id);
+            }
+            let glyph =
+                id.with_scale_and_position(font.scale(), ab_glyph::point(pen, dy + font.ascent()));
+            if let Some(outline) = font.outline_glyph(glyph) {
+                let corner = outline.px_bounds().min;
+                outline.draw(|x, y, c| {
+                    coverage.push((corner.x as i32 + x as i32, corner.y as i32 + y as i32, c));
+                });
+            }
+            pen += font.h_advance(id);
+            previous = Some(id);
+        }
+        for (x, y, c) in coverage {
+            let (x, y) = transform.transform(x, y);
+            // A little more than the coverage, as the light font fades at small sizes.
+            let alpha = colour.alpha * f64::from(c.clamp(0.0, 1.0).powf(0.75));
+            self.inner.draw_pixel(
+                (pos.0 + x, pos.1 + y),
+                BackendColor {
+                    alpha,
+                    rgb: colour.rgb,
+                },
+            )?;
+        }
+        Ok(())
+    }
+
+    fn estimate_text_size<S: BackendTextStyle>(
+        &self,
+        text: &str,
+        style: &S,
+    ) -> Result<(u32, u32), DrawingErrorKind<Self::ErrorType>> {
+        let (width, height) = self.text_extent(text, style.size());
+        Ok((width.ceil() as u32, height.ceil() as u32))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use std::path::PathBuf;
+
+    use mls_shapes::{SurfacePoint, Torus, fibonacci_sphere, normals, points, random};
+
+    use super::*;
+
+    const TORUS_SEED: u64 = 11;
+
+    /// Where the test figures go: a fresh temporary directory, or `$FIGURES_TEST_DIR` when set,
+    /// to look at them.
+    fn out_dir() -> (Option<tempfile::TempDir>, PathBuf) {
+        match std::env::var_os("FIGURES_TEST_DIR") {
+            Some(dir) => (None, PathBuf::from(dir)),
+            None => {
+                let dir = tempfile::tempdir().expect("temporary directory");
+                let path = dir.path().to_path_buf();
+                (Some(dir), path)
+            }
+        }
+    }
+
+    /// Width, height and RGB bytes of a PNG.
+    fn decode(path: &Path) -> (u32, u32, Vec<u8>) {
+        let file = std::io::BufReader::new(std::fs::File::open(path).expect("PNG exists"));
+        let mut reader = png::Decoder::new(file).read_info().expect("PNG header");
+        let mut rgb = vec![0; reader.output_buffer_size().expect("buffer size")];
+        let info = reader.next_frame(&mut rgb).expect("PNG data");
+        assert_eq!(info.color_type, png::ColorType::Rgb);
+        rgb.truncate(info.buffer_size());
+        (info.width, info.height, rgb)
+    }
+
+    /// Whether some pixel in the `half`-pixel square around (x, y) has a colour: neither the
+    /// background nor any grey.
+    fn coloured_near(image: &(u32, u32, Vec<u8>), (x, y): (u32, u32), half: u32) -> bool {
+        let (width, _, rgb) = image;
+        (y - half..y + half).any(|y| {
+            (x - half..x + half).any(|x| {
+                let i = 3 * (y * width + x) as usize;
+                let [r, g, b] = [rgb[i], rgb[i + 1], rgb[i + 2]];
+                !(r == g && g == b)
+            })
+        })
+    }
+
+    fn file_size(path: &Path) -> u64 {
+        std::fs::metadata(path).expect("PNG exists").len()
+    }
+
+    #[test]
+    fn sphere_coloured_by_height_is_a_coloured_ball() {
+        let (_keep, dir) = out_dir();
+        let path = dir.join("sphere.png");
+        let sphere = fibonacci_sphere(4000, 1.0);
+        let (p, n) = (points(&sphere), normals(&sphere));
+        let z: Vec<f64> = p.iter().map(|p| p[2]).collect();
+        let scale = ColourScale {
+            min: -1.0,
+            max: 1.0,
+            label: "z".to_owned(),
+            kind: ScaleKind::Sequential,
+        };
+        let title = "Unit sphere, 4000 points, coloured by height";
+        let cloud = Cloud {
+            points: &p,
+            normals: Some(&n),
+        };
+        splat_png(
+            &path,
+            title,
+            cloud,
+            &z,
+            &scale,
+            View::THREE_QUARTER,
+            (600, 500),
+        )
+        .expect("figure written");
+        let image = decode(&path);
+        assert_eq!((image.0, image.1), (600, 500));
+        // The render area lies between the title band and the legend band.
+        let centre = (300, (TITLE_BAND + 500 - LEGEND_BAND) / 2);
+        assert!(
+            coloured_near(&image, centre, 5),
+            "no colour at the sphere's centre"
+        );
+        assert!(file_size(&path) < 300_000, "{} bytes", file_size(&path));
+    }
+
+    #[test]
+    fn torus_panels_with_diverging_and_missing_values() {
+        let (_keep, dir) = out_dir();
+        let path = dir.join("torus.png");
+        let torus: Vec<SurfacePoint> = random(&Torus::new(1.0, 0.4), 12_000, TORUS_SEED)
+            .iter()
+            .map(|s| s.surface)
+            .collect();
+        let (p, n) = (points(&torus), normals(&torus));
+        let gauss: Vec<f64> = torus.iter().map(SurfacePoint::gauss).collect();
+        // The mean curvature, missing on the quarter x > 0, y > 0 as a failed region would be.
+        let mean: Vec<f64> = torus
+            .iter()
+            .map(|s| {
+                let missing = s.point.x > 0.0 && s.point.y > 0.0;
+                if missing { f64::NAN } else { s.mean() }
+            })
+            .collect();
+        let panels = [
+            Panel {
+                title: "Gaussian curvature K".to_owned(),
+                scale: ColourScale::robust_symmetric(&gauss, "K"),
+                values: gauss,
+            },
+            Panel {
+                title: "Mean curvature H, a quarter missing".to_owned(),
+                scale: ColourScale::robust_sequential(&mean, "H"),
+                values: mean,
+            },
+        ];
+        let title = "Torus R = 1, r = 0.4, 12000 random points";
+        let cloud = Cloud {
+            points: &p,
+            normals: Some(&n),
+        };
+        splat_panels_png(
+            &path,
+            title,
+            cloud,
+            &panels,
+            View::THREE_QUARTER,
+            (600, 500),
+        )
+        .expect("figure written");
+        let image = decode(&path);
+        assert_eq!((image.0, image.1), (1200, 500));
+        // The torus's outer rim, left of the hole, in the first panel.
+        let render_mid = (TITLE_BAND + PANEL_TITLE_BAND + 500 - LEGEND_BAND) / 2;
+        assert!(
+            coloured_near(&image, (110, render_mid), 20),
+            "no colour on the torus"
+        );
+        assert!(file_size(&path) < 600_000, "{} bytes", file_size(&path));
+    }
+
+    #[test]
+    fn line_chart_with_log_axes() {
+        let (_keep, dir) = out_dir();
+        let path = dir.join("chart.png");
+        let density: [f64; 7] = [250.0, 500.0, 1000.0, 2000.0, 4000.0, 8000.0, 16000.0];
+        let series = |name: &str, c: f64, order: f64| Series {
+            name: name.to_owned(),
+            points: density
+                .iter()
+                .map(|&d| (d, c * d.powf(-order / 2.0)))
+                .collect(),
+        };
+        let all = [
+            series("k1, closed form", 3.0, 2.0),
+            series("k2, closed form", 5.0, 2.0),
+            series("k1, normals estimated", 2.0, 1.0),
+            Series {
+                name: "one NaN".to_owned(),
+                points: vec![(300.0, 0.1), (600.0, f64::NAN), (1200.0, 0.05)],
+            },
+        ];
+        line_chart_png(
+            &path,
+            "Curvature error against sampling density",
+            &Axis::log("points on the surface"),
+            &Axis::log("max |error| / |k|"),
+            &all,
+            (700, 500),
+        )
+        .expect("chart written");
+        let image = decode(&path);
+        assert_eq!((image.0, image.1), (700, 500));
+        assert!(file_size(&path) < 100_000, "{} bytes", file_size(&path));
+
+        let linear = dir.join("chart-linear.png");
+        let (x, y) = (Axis::linear("x"), Axis::linear("y"));
+        line_chart_png(&linear, "Linear", &x, &y, &all[..1], (500, 400))
+            .expect("linear chart written");
+        assert_eq!(decode(&linear).0, 500);
+    }
+
+    #[test]
+    fn empty_or_valueless_input_is_an_error_or_grey_not_a_panic() {
+        let (_keep, dir) = out_dir();
+        let path = dir.join("empty.png");
+        let scale = ColourScale::robust_symmetric(&[], "nothing");
+        assert_eq!((scale.min, scale.max), (-1.0, 1.0));
+        let view = View::THREE_QUARTER;
+        let empty = Cloud {
+            points: &[],
+            normals: None,
+        };
+        let error = splat_png(&path, "empty", empty, &[], &scale, view, (300, 300))
+            .expect_err("nothing to draw");
+        assert!(format!("{error:#}").contains("no points"), "{error:#}");
+        let axis = Axis::log("x");
+        let chart = line_chart_png(&path, "t", &axis, &axis, &[], (300, 300));
+        assert!(chart.is_err());
+        assert!(!path.exists());
+
+        // All values missing: a grey render; one point: a disc; no normals: flat colours.
+        let sphere = points(&fibonacci_sphere(500, 1.0));
+        let cloud = Cloud {
+            points: &sphere,
+            normals: None,
+        };
+        let nan = vec![f64::NAN; sphere.len()];
+        let nan_path = dir.join("all-nan.png");
+        splat_png(
+            &nan_path,
+            "no values",
+            cloud,
+            &nan,
+            &scale,
+            view,
+            (300, 300),
+        )
+        .expect("grey figure");
+        assert_eq!(decode(&nan_path).0, 300);
+        let one = Cloud {
+            points: &sphere[..1],
+            normals: None,
+        };
+        splat_png(
+            &dir.join("one.png"),
+            "",
+            one,
+            &[0.5],
+            &scale,
+            view,
+            (300, 300),
+        )
+        .expect("one point");
+
+        // Mismatched lengths and a bad scale are errors naming the problem.
+        let short = splat_png(&path, "t", cloud, &[1.0], &scale, view, (300, 300));
+        assert!(short.is_err());
+        let bad = ColourScale {
+            min: 1.0,
+            max: 1.0,
+            ..scale
+        };
+        let zero = vec![0.0; sphere.len()];
+        let flat = splat_png(&path, "t", cloud, &zero, &bad, view, (300, 300));
+        assert!(format!("{:#}", flat.expect_err("empty range")).contains("min < max"));
+    }
+
+    #[test]
+    fn robust_ranges_ignore_a_few_outliers() {
+        let mut values: Vec<f64> = (0..1000).map(|i| f64::from(i) / 1000.0 - 0.5).collect();
+        values.extend([1e6, -1e6, f64::NAN, f64::INFINITY]);
+        let symmetric = ColourScale::robust_symmetric(&values, "error");
+        assert_eq!(symmetric.min, -symmetric.max);
+        assert!((0.45..0.5).contains(&symmetric.max), "{symmetric:?}");
+        let sequential = ColourScale::robust_sequential(&values, "k");
+        assert!((-0.5..-0.45).contains(&sequential.min), "{sequential:?}");
+        assert!((0.45..0.5).contains(&sequential.max), "{sequential:?}");
+        let constant = ColourScale::robust_sequential(&[2.0; 10], "k");
+        assert_eq!((constant.min, constant.max), (1.5, 2.5));
+    }
+
+    #[test]
+    fn diverging_scale_is_white_at_zero_and_ticks_are_round() {
+        let scale = ColourScale {
+            min: -1.0,
+            max: 3.0,
+            label: String::new(),
+            kind: ScaleKind::Diverging,
+        };
+        assert_eq!(scale.colour(0.0), Some(RDBU[4]));
+        assert_eq!(scale.colour(-5.0), Some(RDBU[0]));
+        assert_eq!(scale.colour(3.0), Some(RDBU[8]));
+        assert_eq!(scale.colour(f64::NAN), None);
+
+        let ticks = Ticks::new(-2.5e-6, 2.5e-6);
+        assert_eq!(ticks.exponent, -6);
+        let labels: Vec<String> = ticks.values.iter().map(|&v| ticks.label(v)).collect();
+        assert_eq!(labels, ["-2", "-1", "0", "1", "2"]);
+        let ticks = Ticks::new(0.0, 0.35);
+        let labels: Vec<String> = ticks.values.iter().map(|&v| ticks.label(v)).collect();
+        assert_eq!(labels, ["0.0", "0.1", "0.2", "0.3"]);
+    }
+}
