@@ -29,6 +29,61 @@ fn vector_columns<'a>(names: [&'a str; 3], v: &'a [[f64; 3]]) -> [Column<'a>; 3]
     ]
 }
 
+/// The columns of `mlscurv curvature` besides the position, filled result by result so that
+/// the full per-point results (about 600 bytes each) are held for one chunk at a time only.
+struct CurvatureColumns {
+    normal: Vec<[f64; 3]>,
+    k1: Vec<f64>,
+    k2: Vec<f64>,
+    mean: Vec<f64>,
+    gauss: Vec<f64>,
+    d1: Vec<[f64; 3]>,
+    d2: Vec<[f64; 3]>,
+    status: Vec<i32>,
+}
+
+impl CurvatureColumns {
+    fn with_capacity(n: usize) -> Self {
+        Self {
+            normal: Vec::with_capacity(n),
+            k1: Vec::with_capacity(n),
+            k2: Vec::with_capacity(n),
+            mean: Vec::with_capacity(n),
+            gauss: Vec::with_capacity(n),
+            d1: Vec::with_capacity(n),
+            d2: Vec::with_capacity(n),
+            status: Vec::with_capacity(n),
+        }
+    }
+
+    /// Appends the row of `r`, and replaces `point` (the query) by the point evaluated at, the
+    /// projection for `--at projected`; a failed point keeps its input position.
+    fn push(&mut self, r: &PointResult, point: &mut Point) {
+        self.status.push(status_code(r));
+        match r {
+            Ok(sp) => {
+                let c = &sp.curvature;
+                *point = sp.point;
+                self.normal.push(c.normal.into());
+                self.k1.push(c.k1);
+                self.k2.push(c.k2);
+                self.mean.push(c.mean);
+                self.gauss.push(c.gauss);
+                self.d1.push(c.d1.into());
+                self.d2.push(c.d2.into());
+            }
+            Err(_) => {
+                for v in [&mut self.normal, &mut self.d1, &mut self.d2] {
+                    v.push(NAN3);
+                }
+                for v in [&mut self.k1, &mut self.k2, &mut self.mean, &mut self.gauss] {
+                    v.push(f64::NAN);
+                }
+            }
+        }
+    }
+}
+
 pub fn curvature(a: CurvatureArgs) -> Result<()> {
     pipeline::check_output(&a.input, &a.out.output)?;
     let s = &a.surface;
@@ -36,85 +91,54 @@ pub fn curvature(a: CurvatureArgs) -> Result<()> {
         let mut t = Timings::default();
         let par = Parallelism::Rayon;
         let Prepared {
-            cloud,
-            points,
+            mut points,
             scale,
-            normals,
+            normals_source,
             surface,
         } = pipeline::prepare(&a.input, s, &mut t)?;
         let label = match a.at {
             At::Input => "curvature",
             At::Projected => "projection",
         };
-        let results: Vec<PointResult> =
-            t.time(label, || {
-                crate::progress::chunked(points.len(), label, interactive(s.run.quiet), |range| {
-                    match a.at {
-                        At::Input => surface.curvature_at_points(&points[range], par),
-                        At::Projected => surface.project_points(&points[range], par),
-                    }
-                })
-            });
-        let n = results.len();
-        let mut pos = Vec::with_capacity(n);
-        let mut nrm = Vec::with_capacity(n);
-        let (mut k1, mut k2, mut mean, mut gauss) = (
-            Vec::with_capacity(n),
-            Vec::with_capacity(n),
-            Vec::with_capacity(n),
-            Vec::with_capacity(n),
-        );
-        let (mut d1, mut d2, mut status) = (
-            Vec::with_capacity(n),
-            Vec::with_capacity(n),
-            Vec::with_capacity(n),
-        );
-        for (r, p) in results.iter().zip(&cloud.points) {
-            status.push(status_code(r));
-            match r {
-                Ok(sp) => {
-                    let c = &sp.curvature;
-                    pos.push(sp.point.coords.into());
-                    nrm.push(c.normal.into());
-                    k1.push(c.k1);
-                    k2.push(c.k2);
-                    mean.push(c.mean);
-                    gauss.push(c.gauss);
-                    d1.push(c.d1.into());
-                    d2.push(c.d2.into());
+        let n = points.len();
+        let mut out = CurvatureColumns::with_capacity(n);
+        t.time(label, || {
+            crate::progress::chunked(n, label, interactive(s.run.quiet), |range| {
+                let chunk = &mut points[range];
+                let results = match a.at {
+                    At::Input => surface.curvature_at_points(chunk, par),
+                    At::Projected => surface.project_points(chunk, par),
+                };
+                for (r, p) in results.iter().zip(chunk) {
+                    out.push(r, p);
                 }
-                Err(_) => {
-                    pos.push(*p);
-                    for v in [&mut nrm, &mut d1, &mut d2] {
-                        v.push(NAN3);
-                    }
-                    for v in [&mut k1, &mut k2, &mut mean, &mut gauss] {
-                        v.push(f64::NAN);
-                    }
-                }
-            }
-        }
+            })
+        });
+        // The surface's samples and tree are not needed for writing.
+        drop(surface);
+        // Same layout: the positions column reuses the points' buffer.
+        let pos: Vec<[f64; 3]> = points.into_iter().map(|p| p.coords.into()).collect();
         let mut columns = Vec::with_capacity(17);
         columns.extend(vector_columns(["x", "y", "z"], &pos));
-        columns.extend(vector_columns(["nx", "ny", "nz"], &nrm));
+        columns.extend(vector_columns(["nx", "ny", "nz"], &out.normal));
         columns.extend([
-            Column::f64("k1", &k1),
-            Column::f64("k2", &k2),
-            Column::f64("mean", &mean),
-            Column::f64("gauss", &gauss),
+            Column::f64("k1", &out.k1),
+            Column::f64("k2", &out.k2),
+            Column::f64("mean", &out.mean),
+            Column::f64("gauss", &out.gauss),
         ]);
-        columns.extend(vector_columns(["d1x", "d1y", "d1z"], &d1));
-        columns.extend(vector_columns(["d2x", "d2y", "d2z"], &d2));
-        columns.push(Column::i32("status", &status));
+        columns.extend(vector_columns(["d1x", "d1y", "d1z"], &out.d1));
+        columns.extend(vector_columns(["d2x", "d2y", "d2z"], &out.d2));
+        columns.push(Column::i32("status", &out.status));
         t.time("write", || {
             mls_io::write_point_cloud(&a.out.output, &columns, ply_format(a.out.ascii))
         })?;
         if !s.run.quiet {
             eprintln!("mlscurv curvature: {}", a.input.display());
-            eprintln!("  points read     {}", points.len());
+            eprintln!("  points read     {n}");
             eprintln!("  h               {:.6} = {}", scale.h, scale.why);
             eprintln!("  cutoff          {}", cutoff_text(s.cutoff));
-            eprintln!("  normals         {}", normals.source);
+            eprintln!("  normals         {normals_source}");
             eprintln!(
                 "  evaluated at    {}",
                 if a.at == At::Input {
@@ -123,12 +147,12 @@ pub fn curvature(a: CurvatureArgs) -> Result<()> {
                     "projected points"
                 }
             );
-            eprintln!("  status          {}", pipeline::status_counts(&status));
-            eprintln!("  k1              {}", pipeline::percentiles(&k1));
-            eprintln!("  k2              {}", pipeline::percentiles(&k2));
-            eprintln!("  mean            {}", pipeline::percentiles(&mean));
-            eprintln!("  gauss           {}", pipeline::percentiles(&gauss));
-            print_timings(&t, points.len());
+            eprintln!("  status          {}", pipeline::status_counts(&out.status));
+            eprintln!("  k1              {}", pipeline::percentiles(&out.k1));
+            eprintln!("  k2              {}", pipeline::percentiles(&out.k2));
+            eprintln!("  mean            {}", pipeline::percentiles(&out.mean));
+            eprintln!("  gauss           {}", pipeline::percentiles(&out.gauss));
+            print_timings(&t, n);
             eprintln!("  wrote           {}", a.out.output.display());
         }
         Ok(())
@@ -271,8 +295,9 @@ pub fn normals(a: NormalsArgs) -> Result<()> {
             pipeline::choose_h(&points, a.scale.h, a.scale.h_factor, par, &a.input)
         })?;
         let est = t.time("normals", || {
+            // Estimated whatever the file holds: its normals are not passed.
             pipeline::normals(
-                &cloud,
+                None,
                 &points,
                 crate::NormalsMode::Estimate,
                 a.orient,
@@ -330,33 +355,36 @@ pub fn project(a: ProjectArgs) -> Result<()> {
         let mut t = Timings::default();
         let par = Parallelism::Rayon;
         let Prepared {
-            cloud,
-            points,
+            mut points,
             scale,
-            normals,
+            normals_source,
             surface,
         } = pipeline::prepare(&a.input, s, &mut t)?;
-        let results = t.time("projection", || {
-            crate::progress::chunked(points.len(), "projection", interactive(s.run.quiet), |r| {
-                surface.project_points(&points[r], par)
+        let n = points.len();
+        let mut nrm = Vec::with_capacity(n);
+        let mut status = Vec::with_capacity(n);
+        // How far each projected point moved, for the summary.
+        let mut moved = Vec::new();
+        t.time("projection", || {
+            crate::progress::chunked(n, "projection", interactive(s.run.quiet), |range| {
+                let chunk = &mut points[range];
+                let results = surface.project_points(chunk, par);
+                for (r, p) in results.iter().zip(chunk) {
+                    status.push(status_code(r));
+                    match r {
+                        Ok(sp) => {
+                            moved.push(dist(&sp.point.coords.into(), &p.coords.into()));
+                            *p = sp.point;
+                            nrm.push(sp.curvature.normal.into());
+                        }
+                        // A failed point keeps its input position.
+                        Err(_) => nrm.push(NAN3),
+                    }
+                }
             })
         });
-        let mut pos = Vec::with_capacity(points.len());
-        let mut nrm = Vec::with_capacity(points.len());
-        let mut status = Vec::with_capacity(points.len());
-        for (r, p) in results.iter().zip(&cloud.points) {
-            status.push(status_code(r));
-            match r {
-                Ok(sp) => {
-                    pos.push(sp.point.coords.into());
-                    nrm.push(sp.curvature.normal.into());
-                }
-                Err(_) => {
-                    pos.push(*p);
-                    nrm.push(NAN3);
-                }
-            }
-        }
+        drop(surface);
+        let pos: Vec<[f64; 3]> = points.into_iter().map(|p| p.coords.into()).collect();
         let mut columns = Vec::new();
         columns.extend(vector_columns(["x", "y", "z"], &pos));
         columns.extend(vector_columns(["nx", "ny", "nz"], &nrm));
@@ -365,20 +393,13 @@ pub fn project(a: ProjectArgs) -> Result<()> {
             mls_io::write_point_cloud(&a.out.output, &columns, ply_format(a.out.ascii))
         })?;
         if !s.run.quiet {
-            let moved: Vec<f64> = pos
-                .iter()
-                .zip(&cloud.points)
-                .zip(&status)
-                .filter(|(_, s)| **s == 0)
-                .map(|((a, b), _)| dist(a, b))
-                .collect();
             eprintln!("mlscurv project: {}", a.input.display());
-            eprintln!("  points read     {}", points.len());
+            eprintln!("  points read     {n}");
             eprintln!("  h               {:.6} = {}", scale.h, scale.why);
-            eprintln!("  normals         {}", normals.source);
+            eprintln!("  normals         {normals_source}");
             eprintln!("  status          {}", pipeline::status_counts(&status));
             eprintln!("  displacement    {}", pipeline::percentiles(&moved));
-            print_timings(&t, points.len());
+            print_timings(&t, n);
             eprintln!("  wrote           {}", a.out.output.display());
         }
         Ok(())

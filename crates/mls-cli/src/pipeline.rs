@@ -99,8 +99,10 @@ pub struct Normals {
     pub source: String,
 }
 
+/// Normals from `file_normals` (the file's, consumed here so that they are not held beside
+/// the converted ones) or estimated from `points`, as `mode` says.
 pub fn normals(
-    cloud: &PointCloud,
+    file_normals: Option<Vec<[f64; 3]>>,
     points: &[Point],
     mode: NormalsMode,
     orientation: Orientation,
@@ -108,7 +110,7 @@ pub fn normals(
     par: Parallelism,
     file: &Path,
 ) -> Result<Normals> {
-    let from_file = match (mode, &cloud.normals) {
+    let from_file = match (mode, file_normals) {
         (NormalsMode::File, None) => {
             bail!(
                 "{}: --normals file given but the file has no normals (nx, ny, nz)",
@@ -120,9 +122,9 @@ pub fn normals(
     };
     if let Some(file_normals) = from_file {
         let normals: Vec<Option<Vector>> = file_normals
-            .iter()
+            .into_iter()
             .map(|n| {
-                mls_core::UnitNormal::new(Vector::from(*n))
+                mls_core::UnitNormal::new(Vector::from(n))
                     .ok()
                     .map(|u| u.into_inner())
             })
@@ -167,51 +169,71 @@ pub fn normals(
     })
 }
 
-/// Everything a command needs before evaluating: the cloud, its points, h, normals and surface.
+/// Everything a command needs before evaluating: the points, h, where the normals came from,
+/// and the surface. The file's normals and the oriented normals are not kept: the surface holds
+/// its own copy, and a cloud's worth of memory counts at a million points.
 pub struct Prepared {
-    pub cloud: PointCloud,
+    /// The input points, in file order.
     pub points: Vec<Point>,
     pub scale: Scale,
-    pub normals: Normals,
+    /// Where the normals came from, for the summary.
+    pub normals_source: String,
     pub surface: MlsSurface,
 }
 
 /// Reads the input, chooses h, gets oriented normals and builds the surface, timing each stage.
 pub fn prepare(input: &Path, s: &SurfaceArgs, t: &mut Timings) -> Result<Prepared> {
     let par = Parallelism::Rayon;
-    let cloud = t.time("read", || read(input))?;
-    let points = to_points(&cloud);
+    let PointCloud {
+        points,
+        normals: file_normals,
+    } = t.time("read", || read(input))?;
+    // `[f64; 3]` and `Point` have the same layout: the conversion reuses the buffer.
+    let points: Vec<Point> = points.into_iter().map(Point::from).collect();
     let scale = t.time("spacing", || {
         choose_h(&points, s.scale.h, s.scale.h_factor, par, input)
     })?;
-    let normals = t.time("normals", || {
-        normals(&cloud, &points, s.normals, s.orient, scale.h, par, input)
+    let Normals { normals, source } = t.time("normals", || {
+        normals(
+            file_normals,
+            &points,
+            s.normals,
+            s.orient,
+            scale.h,
+            par,
+            input,
+        )
     })?;
     let surface = t.time("index", || {
-        surface(&points, &normals.normals, scale.h, s.cutoff, input)
+        surface(&points, normals, scale.h, s.cutoff, input)
     })?;
     Ok(Prepared {
-        cloud,
         points,
         scale,
-        normals,
+        normals_source: source,
         surface,
     })
 }
 
-/// Builds the surface from the points that have normals.
+/// Builds the surface from the points that have normals, consuming the normals.
 pub fn surface(
     points: &[Point],
-    normals: &[Option<Vector>],
+    normals: Vec<Option<Vector>>,
     h: f64,
     cutoff: Cutoff,
     file: &Path,
 ) -> Result<MlsSurface> {
-    let (p, n): (Vec<Point>, Vec<Vector>) = points
-        .iter()
-        .zip(normals)
-        .filter_map(|(p, n)| n.map(|n| (*p, n)))
-        .unzip();
+    // Usually every point has a normal: the points are then passed as they are, not copied.
+    let with_normal = normals.iter().filter(|n| n.is_some()).count();
+    let kept: Option<Vec<Point>> = (with_normal < points.len()).then(|| {
+        points
+            .iter()
+            .zip(&normals)
+            .filter_map(|(p, n)| n.map(|_| *p))
+            .collect()
+    });
+    let n: Vec<Vector> = normals.into_iter().flatten().collect();
+    let p = kept.as_deref().unwrap_or(points);
     if p.len() < MIN_POINTS {
         bail!(
             "{}: only {} point(s) have a normal; at least {MIN_POINTS} are needed",
@@ -220,7 +242,7 @@ pub fn surface(
         );
     }
     MlsSurface::new(
-        &p,
+        p,
         &n,
         MlsConfig {
             cutoff,

@@ -3,6 +3,7 @@
 
 mod atomic;
 mod bad_input;
+mod chunks;
 mod common;
 mod curvature_bunny;
 mod eval;
