@@ -302,41 +302,53 @@ fn finish(state: &State) -> AdaptiveResult {
 /// real surface, which the quadric lacks, would pass for noise.
 const NOISE_WINDOW: f64 = 1.5;
 
-/// Terms of the local quadric fitted to the samples whose residuals estimate σ.
-const FITTED_TERMS: f64 = 4.0;
+/// Coefficients fitted to the samples whose residuals estimate σ (offset and four cubic terms).
+const FITTED_TERMS: f64 = 5.0;
 
-/// σ of the samples around `x` off the local quadric `n·d = −½(k1 (d1·d)² + k2 (d2·d)²)`,
-/// Gaussian-weighted at scale `h`, about their weighted mean (which absorbs the query's own
-/// offset from the surface), corrected for the fitted terms. 0 when too few samples.
+/// σ of the samples around `x` off the local surface, Gaussian-weighted at scale `h` within
+/// [`NOISE_WINDOW`]` · h`, corrected for the fitted terms; 0 when too few samples.
+///
+/// The local surface is the quadric `n·d = −½(k1 u² + k2 v²)` of the MLS normal and curvature
+/// at `x` (`u = d1·d`, `v = d2·d`), plus an offset (the query's own distance from the surface)
+/// and the four cubic terms fitted by weighted least squares: on clean data with varying
+/// curvature the cubic terms would otherwise pass for noise and push the scale up.
 fn residual_noise(ev: &mut crate::surface::Evaluator<'_>, x: &Point, c: &Curvature, h: f64) -> f64 {
+    type Basis = nalgebra::SVector<f64, 5>;
     let support = ev.support_of(x);
     let a = 1.0 / (h * h);
-    let (mut sw, mut sww, mut sr, mut srr) = (0.0, 0.0, 0.0, 0.0);
     let reach2 = (NOISE_WINDOW * h).powi(2);
+    let mut normal = nalgebra::SMatrix::<f64, 5, 5>::zeros();
+    let mut rhs = Basis::zeros();
+    let (mut sw, mut sww, mut srr) = (0.0, 0.0, 0.0);
     for s in &support {
         let d = s.point - x;
-        if d.norm_squared() > reach2 {
+        let d2 = d.norm_squared();
+        if d2 > reach2 {
             continue;
         }
         let (u, v) = (c.d1.dot(&d), c.d2.dot(&d));
         let r = c.normal.dot(&d) + 0.5 * (c.k1 * u * u + c.k2 * v * v);
-        let w = (-a * d.norm_squared()).exp();
+        let w = (-a * d2).exp();
+        // In units of h, so that the normal equations stay well conditioned.
+        let (u, v) = (u / h, v / h);
+        let phi = Basis::new(1.0, u * u * u, u * u * v, u * v * v, v * v * v);
+        normal += w * phi * phi.transpose();
+        rhs += w * r * phi;
         sw += w;
         sww += w * w;
-        sr += w * r;
         srr += w * r * r;
     }
-    if !(sw > 0.0) {
-        return 0.0;
-    }
-    let mean = sr / sw;
-    // The offset and the three second-order terms were fitted to these same samples: the
-    // weighted analogue of dividing by n − 4 instead of n.
     let effective = sw * sw / sww;
-    if !(effective > FITTED_TERMS + 1.0) {
+    if !(sw > 0.0 && effective > FITTED_TERMS + 1.0) {
         return 0.0;
     }
-    ((srr / sw - mean * mean).max(0.0) * effective / (effective - FITTED_TERMS)).sqrt()
+    // Residual sum of squares of the weighted fit; the offset alone if the cubic terms are
+    // not determined (samples on a line).
+    let explained = match normal.cholesky() {
+        Some(ch) => rhs.dot(&ch.solve(&rhs)),
+        None => rhs[0] * rhs[0] / sw,
+    };
+    ((srr - explained).max(0.0) / sw * effective / (effective - FITTED_TERMS)).sqrt()
 }
 
 /// First-order correction of curvature at a projected point for the shrinkage of the MLS
