@@ -2,10 +2,13 @@
 
 use anyhow::{Context, Result};
 use mls_core::normals::{DEFAULT_NEIGHBOURS, NeighbourGraph, orientation_consistency};
-use mls_core::{MlsConfig, MlsSurface, Parallelism, Point, PointResult, PointStatus, Vector};
+use mls_core::{
+    AdaptiveConfig, AdaptiveSurface, Curvature, Location, MlsConfig, MlsSurface, Parallelism,
+    Point, PointStatus, Vector,
+};
 use mls_io::{Axis, Column, PlyFormat};
 
-use crate::pipeline::{self, Prepared, Timings};
+use crate::pipeline::{self, Prepared, Surface, Timings};
 use crate::{
     At, CurvatureArgs, EvalArgs, InfoArgs, NormalsArgs, ProjectArgs, interactive, status_code,
 };
@@ -40,6 +43,9 @@ struct CurvatureColumns {
     d1: Vec<[f64; 3]>,
     d2: Vec<[f64; 3]>,
     status: Vec<i32>,
+    /// Chosen scale and noise estimate, `--adaptive` only.
+    h: Vec<f64>,
+    noise: Vec<f64>,
 }
 
 impl CurvatureColumns {
@@ -53,17 +59,18 @@ impl CurvatureColumns {
             d1: Vec::with_capacity(n),
             d2: Vec::with_capacity(n),
             status: Vec::with_capacity(n),
+            h: Vec::new(),
+            noise: Vec::new(),
         }
     }
 
     /// Appends the row of `r`, and replaces `point` (the query) by the point evaluated at, the
     /// projection for `--at projected`; a failed point keeps its input position.
-    fn push(&mut self, r: &PointResult, point: &mut Point) {
-        self.status.push(status_code(r));
+    fn push(&mut self, r: Result<(Point, Curvature), PointStatus>, point: &mut Point) {
+        self.status.push(status_code(&r));
         match r {
-            Ok(sp) => {
-                let c = &sp.curvature;
-                *point = sp.point;
+            Ok((at, c)) => {
+                *point = at;
                 self.normal.push(c.normal.into());
                 self.k1.push(c.k1);
                 self.k2.push(c.k2);
@@ -95,7 +102,20 @@ pub fn curvature(a: CurvatureArgs) -> Result<()> {
             scale,
             normals_source,
             surface,
-        } = pipeline::prepare(&a.input, s, &mut t)?;
+        } = pipeline::prepare(&a.input, s, &mut t, |p, n, h, cutoff| {
+            Ok(if a.adaptive {
+                let config = AdaptiveConfig {
+                    surface: MlsConfig {
+                        cutoff,
+                        ..MlsConfig::new(h)
+                    },
+                    ..AdaptiveConfig::new(h)
+                };
+                Surface::Adaptive(AdaptiveSurface::new(p, n, &config)?)
+            } else {
+                Surface::Fixed(pipeline::fixed_surface(p, n, h, cutoff)?)
+            })
+        })?;
         let label = match a.at {
             At::Input => "curvature",
             At::Projected => "projection",
@@ -105,12 +125,39 @@ pub fn curvature(a: CurvatureArgs) -> Result<()> {
         t.time(label, || {
             crate::progress::chunked(n, label, interactive(s.run.quiet), |range| {
                 let chunk = &mut points[range];
-                let results = match a.at {
-                    At::Input => surface.curvature_at_points(chunk, par),
-                    At::Projected => surface.project_points(chunk, par),
-                };
-                for (r, p) in results.iter().zip(chunk) {
-                    out.push(r, p);
+                match &surface {
+                    Surface::Fixed(surface) => {
+                        let results = match a.at {
+                            At::Input => surface.curvature_at_points(chunk, par),
+                            At::Projected => surface.project_points(chunk, par),
+                        };
+                        for (r, p) in results.iter().zip(chunk) {
+                            out.push(
+                                r.as_ref().map(|s| (s.point, s.curvature)).map_err(|e| *e),
+                                p,
+                            );
+                        }
+                    }
+                    Surface::Adaptive(surface) => {
+                        let at = match a.at {
+                            At::Input => Location::Input,
+                            At::Projected => Location::Projected,
+                        };
+                        for (r, p) in surface
+                            .curvature_at_points(chunk, at, par)
+                            .iter()
+                            .zip(chunk)
+                        {
+                            out.push(
+                                r.as_ref().map(|s| (s.point, s.curvature)).map_err(|e| *e),
+                                p,
+                            );
+                            let (h, noise) =
+                                r.as_ref().map_or((f64::NAN, f64::NAN), |s| (s.h, s.noise));
+                            out.h.push(h);
+                            out.noise.push(noise);
+                        }
+                    }
                 }
             })
         });
@@ -129,6 +176,10 @@ pub fn curvature(a: CurvatureArgs) -> Result<()> {
         ]);
         columns.extend(vector_columns(["d1x", "d1y", "d1z"], &out.d1));
         columns.extend(vector_columns(["d2x", "d2y", "d2z"], &out.d2));
+        if a.adaptive {
+            columns.push(Column::f64("h", &out.h));
+            columns.push(Column::f64("noise", &out.noise));
+        }
         columns.push(Column::i32("status", &out.status));
         t.time("write", || {
             mls_io::write_point_cloud(&a.out.output, &columns, ply_format(a.out.ascii))
@@ -136,7 +187,18 @@ pub fn curvature(a: CurvatureArgs) -> Result<()> {
         if !s.run.quiet {
             eprintln!("mlscurv curvature: {}", a.input.display());
             eprintln!("  points read     {n}");
-            eprintln!("  h               {:.6} = {}", scale.h, scale.why);
+            if a.adaptive {
+                eprintln!(
+                    "  h               adaptive, per point from {:.6} ({}) to {:.6}",
+                    scale.h,
+                    scale.why,
+                    AdaptiveConfig::new(scale.h).scale(AdaptiveConfig::new(scale.h).scales - 1)
+                );
+                eprintln!("  chosen h        {}", pipeline::percentiles(&out.h));
+                eprintln!("  noise estimate  {}", pipeline::percentiles(&out.noise));
+            } else {
+                eprintln!("  h               {:.6} = {}", scale.h, scale.why);
+            }
             eprintln!("  cutoff          {}", cutoff_text(s.cutoff));
             eprintln!("  normals         {normals_source}");
             eprintln!(
@@ -359,7 +421,7 @@ pub fn project(a: ProjectArgs) -> Result<()> {
             scale,
             normals_source,
             surface,
-        } = pipeline::prepare(&a.input, s, &mut t)?;
+        } = pipeline::prepare(&a.input, s, &mut t, pipeline::fixed_surface)?;
         let n = points.len();
         let mut nrm = Vec::with_capacity(n);
         let mut status = Vec::with_capacity(n);

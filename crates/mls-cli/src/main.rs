@@ -136,6 +136,12 @@ struct CurvatureArgs {
     /// Evaluate at the input points or at their projections onto the MLS surface.
     #[arg(long, value_enum, default_value_t = At::Input)]
     at: At,
+    /// Choose h per point: from the scale given by --h or --h-factor up to 4 times it, the
+    /// largest scale whose estimate agrees with the smaller ones within the local noise, with
+    /// the h² bias extrapolated away. Adds the columns `h` and `noise`. For noisy scans; on
+    /// clean data use it with `--at projected`. Builds five surfaces (memory and time grow).
+    #[arg(long)]
+    adaptive: bool,
 }
 
 #[derive(Debug, Args)]

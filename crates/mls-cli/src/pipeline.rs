@@ -8,7 +8,10 @@ use mls_core::normals::{
     DEFAULT_NEIGHBOURS, DEFAULT_SPACING_NEIGHBOURS, NormalsConfig, Orientation, SpacingStats,
     estimate_normals, spacing_statistics, suggest_h,
 };
-use mls_core::{Cutoff, MlsConfig, MlsSurface, Parallelism, Point, PointStatus, Vector};
+use mls_core::{
+    AdaptiveSurface, ConfigError, Cutoff, MlsConfig, MlsSurface, Parallelism, Point, PointStatus,
+    Vector,
+};
 use mls_io::PointCloud;
 
 use crate::{NormalsMode, SurfaceArgs};
@@ -172,17 +175,46 @@ pub fn normals(
 /// Everything a command needs before evaluating: the points, h, where the normals came from,
 /// and the surface. The file's normals and the oriented normals are not kept: the surface holds
 /// its own copy, and a cloud's worth of memory counts at a million points.
-pub struct Prepared {
+pub struct Prepared<S = MlsSurface> {
     /// The input points, in file order.
     pub points: Vec<Point>,
     pub scale: Scale,
     /// Where the normals came from, for the summary.
     pub normals_source: String,
-    pub surface: MlsSurface,
+    pub surface: S,
 }
 
-/// Reads the input, chooses h, gets oriented normals and builds the surface, timing each stage.
-pub fn prepare(input: &Path, s: &SurfaceArgs, t: &mut Timings) -> Result<Prepared> {
+/// The surface `mlscurv curvature` evaluates: one scale, or a per-point scale (`--adaptive`).
+pub enum Surface {
+    Fixed(MlsSurface),
+    Adaptive(AdaptiveSurface),
+}
+
+/// Builds one fixed-scale surface.
+pub fn fixed_surface(
+    points: &[Point],
+    normals: &[Vector],
+    h: f64,
+    cutoff: Cutoff,
+) -> Result<MlsSurface, ConfigError> {
+    MlsSurface::new(
+        points,
+        normals,
+        MlsConfig {
+            cutoff,
+            ..MlsConfig::new(h)
+        },
+    )
+}
+
+/// Reads the input, chooses h, gets oriented normals and builds the surface with `build`
+/// (points, normals, h, cutoff), timing each stage.
+pub fn prepare<S>(
+    input: &Path,
+    s: &SurfaceArgs,
+    t: &mut Timings,
+    build: impl FnOnce(&[Point], &[Vector], f64, Cutoff) -> Result<S, ConfigError>,
+) -> Result<Prepared<S>> {
     let par = Parallelism::Rayon;
     let PointCloud {
         points,
@@ -205,7 +237,7 @@ pub fn prepare(input: &Path, s: &SurfaceArgs, t: &mut Timings) -> Result<Prepare
         )
     })?;
     let surface = t.time("index", || {
-        surface(&points, normals, scale.h, s.cutoff, input)
+        surface(&points, normals, scale.h, s.cutoff, input, build)
     })?;
     Ok(Prepared {
         points,
@@ -216,13 +248,14 @@ pub fn prepare(input: &Path, s: &SurfaceArgs, t: &mut Timings) -> Result<Prepare
 }
 
 /// Builds the surface from the points that have normals, consuming the normals.
-pub fn surface(
+pub fn surface<S>(
     points: &[Point],
     normals: Vec<Option<Vector>>,
     h: f64,
     cutoff: Cutoff,
     file: &Path,
-) -> Result<MlsSurface> {
+    build: impl FnOnce(&[Point], &[Vector], f64, Cutoff) -> Result<S, ConfigError>,
+) -> Result<S> {
     // Usually every point has a normal: the points are then passed as they are, not copied.
     let with_normal = normals.iter().filter(|n| n.is_some()).count();
     let kept: Option<Vec<Point>> = (with_normal < points.len()).then(|| {
@@ -241,15 +274,7 @@ pub fn surface(
             p.len()
         );
     }
-    MlsSurface::new(
-        p,
-        &n,
-        MlsConfig {
-            cutoff,
-            ..MlsConfig::new(h)
-        },
-    )
-    .with_context(|| format!("{}", file.display()))
+    build(p, &n, h, cutoff).with_context(|| format!("{}", file.display()))
 }
 
 /// Runs `f` on a rayon pool with the requested number of threads (all cores by default).

@@ -128,7 +128,8 @@ struct State {
     done: bool,
 }
 
-/// Curvature at each query with a per-point scale chosen from the ladder of `config`.
+/// Curvature at each query with a per-point scale chosen from the ladder of `config`: builds
+/// an [`AdaptiveSurface`] and evaluates it once.
 ///
 /// Errors are per point as in [`MlsSurface::curvature_at_points`]; the outer error is a bad
 /// configuration or cloud.
@@ -140,73 +141,117 @@ pub fn adaptive_curvature(
     config: &AdaptiveConfig,
     par: Parallelism,
 ) -> Result<Vec<AdaptiveResult>, ConfigError> {
-    let scales = config.scales.max(2);
-    let mut states = vec![
-        State {
-            lower: [f64::NEG_INFINITY; 2],
-            upper: [f64::INFINITY; 2],
-            ..State::default()
-        };
-        queries.len()
-    ];
-    for j in 0..scales {
-        let active: Vec<usize> = (0..queries.len()).filter(|&i| !states[i].done).collect();
-        if active.is_empty() {
-            break;
-        }
-        let h = config.scale(j);
-        let surface = MlsSurface::new(
-            points,
-            normals,
-            MlsConfig {
-                h,
-                ..config.surface
-            },
-        )?;
-        let at_scale: Vec<Point> = active.iter().map(|&i| queries[i]).collect();
-        let results = match at {
-            Location::Input => surface.curvature_at_points(&at_scale, par),
-            Location::Projected => surface.project_points(&at_scale, par),
-        };
-        // Admissible estimates, with the noise estimate where the point has none yet.
-        let needs_noise: Vec<bool> = active.iter().map(|&i| states[i].noise.is_none()).collect();
-        let last = j + 1 == scales;
-        let step = |ev: &mut crate::surface::Evaluator<'_>, k: usize| {
-            let r = results[k].as_ref().map_err(|s| *s)?;
-            let weight_sum = r.implicit.weight_sum * (-r.implicit.log_scale).exp();
-            let spacing = (std::f64::consts::PI * h * h / weight_sum).sqrt();
-            // The largest scale is the best there is in a sparse region.
-            if !(h >= config.min_h_factor * spacing) && !last {
-                return Ok(None);
-            }
-            let noise = needs_noise[k].then(|| residual_noise(ev, &r.point, &r.curvature, h));
-            Ok(Some((
-                Estimate {
-                    h,
-                    point: r.point,
-                    curvature: r.curvature,
-                    unit_scatter: 1.0 / (h * h * (2.0 * weight_sum).sqrt()),
-                },
-                noise,
-            )))
-        };
-        type Step = Result<Option<(Estimate, Option<f64>)>, PointStatus>;
-        let steps: Vec<Step> = match par {
-            Parallelism::Sequential => {
-                let mut ev = surface.evaluator();
-                (0..active.len()).map(|k| step(&mut ev, k)).collect()
-            }
-            Parallelism::Rayon => (0..active.len())
-                .into_par_iter()
-                .with_min_len(64)
-                .map_init(|| surface.evaluator(), |ev, k| step(ev, k))
-                .collect(),
-        };
-        for (&i, step) in active.iter().zip(steps) {
-            advance(&mut states[i], step, config.confidence, last);
-        }
+    Ok(AdaptiveSurface::new(points, normals, config)?.curvature_at_points(queries, at, par))
+}
+
+/// The MLS surfaces of one cloud at every scale of the ladder, built once and evaluated in as
+/// many batches of queries as wanted. Holds one [`MlsSurface`] per scale.
+#[derive(Debug)]
+pub struct AdaptiveSurface {
+    config: AdaptiveConfig,
+    ladder: Vec<MlsSurface>,
+}
+
+impl AdaptiveSurface {
+    /// Builds the surfaces of the ladder (at least two scales).
+    pub fn new(
+        points: &[Point],
+        normals: &[Vector],
+        config: &AdaptiveConfig,
+    ) -> Result<Self, ConfigError> {
+        let ladder = (0..config.scales.max(2))
+            .map(|j| {
+                let h = config.scale(j);
+                MlsSurface::new(
+                    points,
+                    normals,
+                    MlsConfig {
+                        h,
+                        ..config.surface
+                    },
+                )
+            })
+            .collect::<Result<_, _>>()?;
+        Ok(Self {
+            config: *config,
+            ladder,
+        })
     }
-    Ok(states.iter().map(finish).collect())
+
+    /// The configuration.
+    pub fn config(&self) -> &AdaptiveConfig {
+        &self.config
+    }
+
+    /// Curvature at each query, in query order, each at its own scale.
+    pub fn curvature_at_points(
+        &self,
+        queries: &[Point],
+        at: Location,
+        par: Parallelism,
+    ) -> Vec<AdaptiveResult> {
+        let config = &self.config;
+        let scales = self.ladder.len();
+        let mut states = vec![
+            State {
+                lower: [f64::NEG_INFINITY; 2],
+                upper: [f64::INFINITY; 2],
+                ..State::default()
+            };
+            queries.len()
+        ];
+        for (j, surface) in self.ladder.iter().enumerate() {
+            let active: Vec<usize> = (0..queries.len()).filter(|&i| !states[i].done).collect();
+            if active.is_empty() {
+                break;
+            }
+            let h = surface.kernel().h();
+            let at_scale: Vec<Point> = active.iter().map(|&i| queries[i]).collect();
+            let results = match at {
+                Location::Input => surface.curvature_at_points(&at_scale, par),
+                Location::Projected => surface.project_points(&at_scale, par),
+            };
+            // Admissible estimates, with the noise estimate where the point has none yet.
+            let needs_noise: Vec<bool> =
+                active.iter().map(|&i| states[i].noise.is_none()).collect();
+            let last = j + 1 == scales;
+            let step = |ev: &mut crate::surface::Evaluator<'_>, k: usize| {
+                let r = results[k].as_ref().map_err(|s| *s)?;
+                let weight_sum = r.implicit.weight_sum * (-r.implicit.log_scale).exp();
+                let spacing = (std::f64::consts::PI * h * h / weight_sum).sqrt();
+                // The largest scale is the best there is in a sparse region.
+                if !(h >= config.min_h_factor * spacing) && !last {
+                    return Ok(None);
+                }
+                let noise = needs_noise[k].then(|| residual_noise(ev, &r.point, &r.curvature, h));
+                Ok(Some((
+                    Estimate {
+                        h,
+                        point: r.point,
+                        curvature: r.curvature,
+                        unit_scatter: 1.0 / (h * h * (2.0 * weight_sum).sqrt()),
+                    },
+                    noise,
+                )))
+            };
+            type Step = Result<Option<(Estimate, Option<f64>)>, PointStatus>;
+            let steps: Vec<Step> = match par {
+                Parallelism::Sequential => {
+                    let mut ev = surface.evaluator();
+                    (0..active.len()).map(|k| step(&mut ev, k)).collect()
+                }
+                Parallelism::Rayon => (0..active.len())
+                    .into_par_iter()
+                    .with_min_len(64)
+                    .map_init(|| surface.evaluator(), |ev, k| step(ev, k))
+                    .collect(),
+            };
+            for (&i, step) in active.iter().zip(steps) {
+                advance(&mut states[i], step, config.confidence, last);
+            }
+        }
+        states.iter().map(finish).collect()
+    }
 }
 
 /// Takes one scale's outcome into a point's state.

@@ -26,7 +26,8 @@ pub mod status;
 pub mod surface;
 
 pub use adaptive::{
-    AdaptiveConfig, AdaptivePoint, AdaptiveResult, Location, adaptive_curvature, correct_shrinkage,
+    AdaptiveConfig, AdaptivePoint, AdaptiveResult, AdaptiveSurface, Location, adaptive_curvature,
+    correct_shrinkage,
 };
 pub use curvature::{Curvature, curvature};
 pub use error::ConfigError;
