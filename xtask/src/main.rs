@@ -8,11 +8,8 @@ use anyhow::{Context, Result, bail};
 mod bench;
 mod defaults;
 mod faults;
-#[cfg_attr(
-    not(test),
-    expect(dead_code, reason = "used by cargo xtask paper, landing next")
-)]
 mod figures;
+mod paper;
 mod robustness;
 mod validate;
 mod validate_shapes;
@@ -30,6 +27,10 @@ Tasks:
   bench [--quick] Throughput, memory and scaling against issue 5's targets; writes
                  docs/benchmarks.md. --quick: small clouds, writes target/bench/quick.md.
   defaults       The measurements behind mlscurv's defaults (--h-factor, --at); writes docs/defaults.md.
+  paper [--quick] [--check]
+                 The paper's Tables 1-2, Figure 8, h and cutoff studies, adaptive h and figures;
+                 writes docs/paper.md and docs/figures/. --check: fails if docs/paper.md is stale.
+                 --quick: reduced densities into target/paper/.
   ci             fmt --check, clippy -D warnings, tests, validate --quick.";
 
 fn main() -> Result<()> {
@@ -46,6 +47,7 @@ fn main() -> Result<()> {
         "robustness" => robustness::run(&robustness::Options::parse(rest)?),
         "bench" => bench::run(rest),
         "defaults" => defaults::run(),
+        "paper" => paper::run(&paper::Options::parse(rest)?),
         "ci" => ci(),
         other => bail!("unknown task `{other}`\n{TASKS}"),
     }
