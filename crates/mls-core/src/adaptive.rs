@@ -9,9 +9,11 @@
 //! 1. **Local spacing.** Scales below `min_h_factor` × the local spacing at the point (from the
 //!    kernel's own weight sum, `s = √(π h² / Σw)` for a uniform density) under-resolve the
 //!    sampling and are skipped, so `h_min` may be set for the densest region.
-//! 2. **Noise.** σ is estimated at the first usable scale from the samples' residuals to the
-//!    local quadric given by the MLS normal and principal curvatures there, and turned into a
-//!    predicted scatter `sd_j = C σ / (h_j² √(2 Σw_j))` with [`NOISE_GAIN`] = C calibrated once
+//! 2. **Noise.** σ is estimated at the first usable scale from the samples within 2h: their
+//!    heights over the local quadric of the MLS normal and principal curvatures, less a
+//!    weighted least-squares cubic in the tangent coordinates (so that a tilt, a curvature
+//!    error and varying curvature do not read as noise), scaled to be unbiased for independent
+//!    noise. It is turned into a predicted scatter `sd_j = C σ / (h_j² √(2 Σw_j))` with [`NOISE_GAIN`] = C calibrated once
 //!    on a noisy plane (no bias, all error is noise).
 //! 3. **Scale choice (intersection of confidence intervals).** Going up the ladder, the scale
 //!    is kept while the intervals `k_j ± Γ sd_j` of all scales so far still intersect, for k1
@@ -22,8 +24,11 @@
 //!    extrapolated to h = 0 (Richardson) when that bias exceeds twice the predicted scatter,
 //!    the point where extrapolating (which doubles the scatter) lowers the expected error.
 //!
-//! On clean data σ ≈ 0, the first scale is chosen and extrapolated; on noisy data the scale
-//! grows until the bias shows. `docs/paper.md` measures both.
+//! On noisy data the scale grows until the bias shows. On clean data the estimate of σ is what
+//! the cubic leaves of the surface (about 1e-5 on the paper's torus of tube radius 0.2), so
+//! the scale still grows where the bias at the input points is small; at the projected points,
+//! whose shrinkage bias is large, the smallest scales are kept and extrapolation removes the
+//! bias. `docs/paper.md` measures both.
 
 use rayon::prelude::*;
 
@@ -344,56 +349,83 @@ fn finish(state: &State) -> AdaptiveResult {
 }
 
 /// Residuals are taken within this many h of the point: farther out the quartic terms of the
-/// real surface, which the quadric lacks, would pass for noise.
-const NOISE_WINDOW: f64 = 1.5;
+/// real surface, which the fitted cubic lacks, would pass for noise; closer in, too few samples
+/// are left after fitting ten terms (the estimate's own scatter then stops the scale too early
+/// at some points).
+const NOISE_WINDOW: f64 = 2.0;
 
-/// Coefficients fitted to the samples whose residuals estimate σ (offset and four cubic terms).
-const FITTED_TERMS: f64 = 5.0;
+/// Fewer residual degrees of freedom than about this many samples' worth give no estimate.
+const MIN_DOF: f64 = 3.0;
 
 /// σ of the samples around `x` off the local surface, Gaussian-weighted at scale `h` within
-/// [`NOISE_WINDOW`]` · h`, corrected for the fitted terms; 0 when too few samples.
+/// [`NOISE_WINDOW`]` · h`, unbiased for independent noise (the residual sum of squares over its
+/// expectation per unit variance); 0 when too few samples.
 ///
 /// The local surface is the quadric `n·d = −½(k1 u² + k2 v²)` of the MLS normal and curvature
 /// at `x` (`u = d1·d`, `v = d2·d`), plus an offset (the query's own distance from the surface)
 /// and the four cubic terms fitted by weighted least squares: on clean data with varying
 /// curvature the cubic terms would otherwise pass for noise and push the scale up.
 fn residual_noise(ev: &mut crate::surface::Evaluator<'_>, x: &Point, c: &Curvature, h: f64) -> f64 {
-    type Basis = nalgebra::SVector<f64, 5>;
-    let support = ev.support_of(x);
+    type Basis = nalgebra::SVector<f64, 10>;
     let a = 1.0 / (h * h);
     let reach2 = (NOISE_WINDOW * h).powi(2);
-    let mut normal = nalgebra::SMatrix::<f64, 5, 5>::zeros();
+    // (weight, basis, residual) of each sample in the window.
+    let rows: Vec<(f64, Basis, f64)> = ev
+        .support_of(x)
+        .iter()
+        .filter_map(|s| {
+            let d = s.point - x;
+            let d2 = d.norm_squared();
+            (d2 <= reach2).then(|| {
+                let (u, v) = (c.d1.dot(&d), c.d2.dot(&d));
+                let r = c.normal.dot(&d) + 0.5 * (c.k1 * u * u + c.k2 * v * v);
+                // In units of h, so that the normal equations stay well conditioned.
+                let (u, v) = (u / h, v / h);
+                let phi = Basis::from_column_slice(&[
+                    1.0,
+                    u,
+                    v,
+                    u * u,
+                    u * v,
+                    v * v,
+                    u * u * u,
+                    u * u * v,
+                    u * v * v,
+                    v * v * v,
+                ]);
+                ((-a * d2).exp(), phi, r)
+            })
+        })
+        .collect();
+    let mut normal = nalgebra::SMatrix::<f64, 10, 10>::zeros();
     let mut rhs = Basis::zeros();
-    let (mut sw, mut sww, mut srr) = (0.0, 0.0, 0.0);
-    for s in &support {
-        let d = s.point - x;
-        let d2 = d.norm_squared();
-        if d2 > reach2 {
-            continue;
-        }
-        let (u, v) = (c.d1.dot(&d), c.d2.dot(&d));
-        let r = c.normal.dot(&d) + 0.5 * (c.k1 * u * u + c.k2 * v * v);
-        let w = (-a * d2).exp();
-        // In units of h, so that the normal equations stay well conditioned.
-        let (u, v) = (u / h, v / h);
-        let phi = Basis::new(1.0, u * u * u, u * u * v, u * v * v, v * v * v);
-        normal += w * phi * phi.transpose();
-        rhs += w * r * phi;
+    let (mut sw, mut srr) = (0.0, 0.0);
+    for (w, phi, r) in &rows {
+        normal += *w * phi * phi.transpose();
+        rhs += *w * *r * phi;
         sw += w;
-        sww += w * w;
         srr += w * r * r;
     }
-    let effective = sw * sw / sww;
-    if !(sw > 0.0 && effective > FITTED_TERMS + 1.0) {
+    // Residual sum of squares of the weighted fit, and its expectation per unit σ²:
+    // E[Σ w e²] = σ² (Σ w − Σ w² φᵀ A⁻¹ φ) for independent noise of variance σ².
+    let (explained, leverage) = match normal.cholesky() {
+        Some(ch) => (
+            rhs.dot(&ch.solve(&rhs)),
+            rows.iter()
+                .map(|(w, phi, _)| w * w * phi.dot(&ch.solve(phi)))
+                .sum::<f64>(),
+        ),
+        // Samples on a line do not determine the cubic terms: the offset alone.
+        None => (
+            rhs[0] * rhs[0] / sw,
+            rows.iter().map(|(w, _, _)| w * w).sum::<f64>() / sw,
+        ),
+    };
+    let dof = sw - leverage;
+    if !(sw > 0.0 && dof > MIN_DOF * sw / rows.len().max(1) as f64) {
         return 0.0;
     }
-    // Residual sum of squares of the weighted fit; the offset alone if the cubic terms are
-    // not determined (samples on a line).
-    let explained = match normal.cholesky() {
-        Some(ch) => rhs.dot(&ch.solve(&rhs)),
-        None => rhs[0] * rhs[0] / sw,
-    };
-    ((srr - explained).max(0.0) / sw * effective / (effective - FITTED_TERMS)).sqrt()
+    ((srr - explained).max(0.0) / dof).sqrt()
 }
 
 /// First-order correction of curvature at a projected point for the shrinkage of the MLS
