@@ -128,19 +128,22 @@ impl Case {
 }
 
 /// Normals estimated by mlscurv's estimator at scale h, globally flipped if needed to agree
-/// with the reference orientation (orientation is a convention the user chooses).
+/// with the reference orientation (orientation is a convention the user chooses). Fails if
+/// any estimate fails: the rows would otherwise mix in exact normals.
 fn estimated_normals(points: &[Point], exact: &[Vector], h: f64) -> Result<Vec<Vector>> {
     let config = NormalsConfig {
         h: Some(h),
         ..NormalsConfig::default()
     };
     let est = estimate_normals(points, &config, Parallelism::Rayon)?;
-    let normals: Vec<Vector> = est
-        .normals()
-        .into_iter()
-        .zip(exact)
-        .map(|(n, e)| n.unwrap_or(*e))
-        .collect();
+    if est.failed() > 0 {
+        bail!(
+            "{} of {} normal estimates failed",
+            est.failed(),
+            points.len()
+        );
+    }
+    let normals: Vec<Vector> = est.normals().into_iter().flatten().collect();
     let agree: f64 = normals
         .iter()
         .zip(exact)
@@ -730,6 +733,8 @@ fn generate(quick: bool, fig_dir: &Path) -> Result<String> {
     h_study(quick, &mut md)?;
     cutoff_study(quick, &mut md)?;
     bunny(&mut md, fig_dir)?;
+    md.push('\n');
+    md.push_str(include_str!("paper_outro.md"));
     Ok(md)
 }
 
