@@ -265,12 +265,18 @@ pub(crate) fn splat_png(
         scale,
     };
     let splats = Splats::new(cloud).with_context(|| format!("cannot draw {}", path.display()))?;
-    render_panels(path, title, &splats, &[panel], view, size)
+    let band = if title.is_empty() { 0 } else { TITLE_BAND };
+    let grid = Grid {
+        columns: 1,
+        panel: (size.0, size.1.saturating_sub(band)),
+    };
+    render_panels(path, title, &splats, &[panel], view, grid)
 }
 
 /// Several renders of one cloud side by side in one PNG, sharing the view: for instance k1, k2
 /// and their errors. Each panel gets its own title and colour bar; `panel_size` is the size of
-/// one panel, and the figure's title band comes out of it.
+/// one panel; panels fill rows of `columns` (so that a figure shown at page width keeps them
+/// large enough to read), and the figure's title band is added above.
 pub(crate) fn splat_panels_png(
     path: &Path,
     title: &str,
@@ -278,6 +284,7 @@ pub(crate) fn splat_panels_png(
     panels: &[Panel],
     view: View,
     panel_size: (u32, u32),
+    columns: usize,
 ) -> Result<()> {
     ensure!(
         !panels.is_empty(),
@@ -293,11 +300,18 @@ pub(crate) fn splat_panels_png(
             scale: &p.scale,
         })
         .collect();
-    let width = panel_size
-        .0
-        .checked_mul(panels.len() as u32)
-        .context("figure too wide")?;
-    render_panels(path, title, &splats, &panels, view, (width, panel_size.1))
+    let grid = Grid {
+        columns: panels.len().min(columns.max(1)) as u32,
+        panel: panel_size,
+    };
+    render_panels(path, title, &splats, &panels, view, grid)
+}
+
+/// Panels laid out in rows of `columns`, each `panel` pixels, under the figure's title band.
+#[derive(Clone, Copy, Debug)]
+struct Grid {
+    columns: u32,
+    panel: (u32, u32),
 }
 
 /// A line chart of several series with markers, axis labels and a legend: for instance error
@@ -602,7 +616,7 @@ fn render_panels(
     cloud: &Splats<'_>,
     panels: &[PanelRef<'_>],
     view: View,
-    size: (u32, u32),
+    grid: Grid,
 ) -> Result<()> {
     let context = || format!("cannot draw {}", path.display());
     for panel in panels {
@@ -617,12 +631,25 @@ fn render_panels(
         panel.scale.check().with_context(context)?;
     }
     let title_band = if title.is_empty() { 0 } else { TITLE_BAND };
-    let panel_width = size.0 / panels.len() as u32;
+    let columns = grid.columns.max(1);
+    let rows = (panels.len() as u32).div_ceil(columns);
+    let (panel_width, panel_height) = grid.panel;
+    let size = (
+        panel_width
+            .checked_mul(columns)
+            .context("figure too wide")?,
+        panel_height
+            .checked_mul(rows)
+            .and_then(|h| h.checked_add(title_band))
+            .context("figure too tall")?,
+    );
     let mut canvas = Canvas::new(size)?;
     let mut layouts = Vec::with_capacity(panels.len());
     for (i, panel) in panels.iter().enumerate() {
-        let x0 = i as u32 * panel_width;
-        let layout = PanelLayout::new(x0, title_band, panel_width, size.1, panel.title)
+        let (row, column) = (i as u32 / columns, i as u32 % columns);
+        let x0 = column * panel_width;
+        let top = title_band + row * panel_height;
+        let layout = PanelLayout::new(x0, top, panel_width, top + panel_height, panel.title)
             .with_context(|| format!("{} is too small for its panels", path.display()))?;
         let colours: Vec<Option<Rgb>> = panel
             .values
@@ -1369,12 +1396,13 @@ mod tests {
             &panels,
             View::THREE_QUARTER,
             (600, 500),
+            2,
         )
         .expect("figure written");
         let image = decode(&path);
-        assert_eq!((image.0, image.1), (1200, 500));
+        assert_eq!((image.0, image.1), (1200, 500 + TITLE_BAND));
         // The torus's outer rim, left of the hole, in the first panel.
-        let render_mid = (TITLE_BAND + PANEL_TITLE_BAND + 500 - LEGEND_BAND) / 2;
+        let render_mid = TITLE_BAND + (PANEL_TITLE_BAND + 500 - LEGEND_BAND) / 2;
         assert!(
             coloured_near(&image, (110, render_mid), 20),
             "no colour on the torus"

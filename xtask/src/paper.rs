@@ -625,7 +625,8 @@ fn shape_figure(case: &Case, maps: &Maps, dir: &Path, file: &str) -> Result<()> 
         },
         &panels,
         case.view,
-        (340, 340),
+        (400, 360),
+        2,
     )
 }
 
@@ -1006,6 +1007,7 @@ fn bunny(md: &mut String, fig_dir: &Path) -> Result<()> {
             elevation_deg: 10.0,
         },
         (420, 420),
+        2,
     )?;
     writeln!(
         md,
