@@ -329,10 +329,15 @@ fn finish(state: &State) -> AdaptiveResult {
         let b2 = bias(chosen.curvature.k2, partner.curvature.k2);
         if b1.abs().max(b2.abs()) > 2.0 * scatter && (hb2 - ha2).abs() > 0.0 {
             let (k1, k2) = (curvature.k1 - b1, curvature.k2 - b2);
-            // Extrapolation keeps the order except at umbilics, where both are one value.
-            let (k1, k2) = if k1 >= k2 { (k1, k2) } else { (k2, k1) };
-            curvature.k1 = k1;
-            curvature.k2 = k2;
+            // Extrapolation keeps the order except near umbilics; if it swaps them, the
+            // directions follow, keeping d1 × d2 = normal.
+            if k1 >= k2 {
+                (curvature.k1, curvature.k2) = (k1, k2);
+            } else {
+                (curvature.k1, curvature.k2) = (k2, k1);
+                (curvature.d1, curvature.d2) = (curvature.d2, -curvature.d1);
+            }
+            let (k1, k2) = (curvature.k1, curvature.k2);
             curvature.mean = 0.5 * (k1 + k2);
             curvature.gauss = k1 * k2;
             extrapolated = true;
