@@ -758,7 +758,7 @@ fn chosen_scale_figure(case: &Case, fig_dir: &Path, md: &mut String) -> Result<(
     let nrm: Vec<[f64; 3]> = case.queries.iter().map(|&i| case.exact[i].into()).collect();
     figures::splat_png(
         &fig_dir.join("torus-noise-1e-3-scale.png"),
-        "Noisy torus (σ = 1e-3): adaptive scale chosen at the input points",
+        "Noisy torus σ = 1e-3: scale chosen at the input points",
         figures::Cloud {
             points: &pts,
             normals: Some(&nrm),
