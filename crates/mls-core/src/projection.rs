@@ -132,6 +132,12 @@ pub(crate) fn line_minimum(
             lo = t;
         }
         let newton = t - n1 / n2;
+        // A Newton step below the tolerance has converged, also when rounding puts it on the
+        // bracket's end at `t` or just past it; bisecting from there would only walk back to
+        // the same root in several more evaluations.
+        if n2 > 0.0 && (newton - t).abs() < tol {
+            return Some(newton.clamp(lo.min(hi), lo.max(hi)));
+        }
         let inside = (newton - lo) * (newton - hi) < 0.0;
         let next = if n2 > 0.0 && inside {
             newton
