@@ -89,7 +89,7 @@ pub(crate) fn line_minimum(
     // Bounded: Newton converges in a handful of steps and h/4 steps reach max_travel in six;
     // a walk that does neither within the bound is reported, not continued.
     let mut walk = 0;
-    let (lo, hi) = loop {
+    let (lo, hi, at_hi) = loop {
         walk += 1;
         if walk > MAX_WALK_STEPS {
             return None;
@@ -109,7 +109,7 @@ pub(crate) fn line_minimum(
             return None;
         }
         if n1 == 0.0 || n1.signum() == dir {
-            break (t, t_new);
+            break (t, t_new, (n1, n2));
         }
         if step < tol && n2 > 0.0 {
             return Some(t_new);
@@ -119,8 +119,10 @@ pub(crate) fn line_minimum(
     // Safeguarded Newton inside the bracket: e'·dir < 0 at `lo`, ≥ 0 at `hi`.
     let (mut lo, mut hi) = (lo, hi);
     let mut t = hi;
+    // The walk has just evaluated e' and e'' at `hi`.
+    let mut known = Some(at_hi);
     for _ in 0..200 {
-        let (n1, n2) = f(t);
+        let (n1, n2) = known.take().unwrap_or_else(|| f(t));
         if n1 == 0.0 {
             return Some(t);
         }
@@ -130,6 +132,12 @@ pub(crate) fn line_minimum(
             lo = t;
         }
         let newton = t - n1 / n2;
+        // A Newton step below the tolerance has converged, also when rounding puts it on the
+        // bracket's end at `t` or just past it; bisecting from there would only walk back to
+        // the same root in several more evaluations.
+        if n2 > 0.0 && (newton - t).abs() < tol {
+            return Some(newton.clamp(lo.min(hi), lo.max(hi)));
+        }
         let inside = (newton - lo) * (newton - hi) < 0.0;
         let next = if n2 > 0.0 && inside {
             newton

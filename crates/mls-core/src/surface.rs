@@ -202,8 +202,57 @@ impl MlsSurface {
     }
 
     /// Projects each query point onto the MLS surface and evaluates curvature there.
+    ///
+    /// Queries are processed in Morton order, so that consecutive projections touch nearby
+    /// samples and tree nodes; each runs on its own, exactly as [`Evaluator::project`].
+    /// (Sharing one neighbour search per cluster of queries, as [`Self::curvature_at_points`]
+    /// does, was measured and did not pay here: filtering each line search's support from the
+    /// cluster's candidates cost as many instructions as the searches it saved.)
     pub fn project_points(&self, queries: &[Point], par: Parallelism) -> Vec<PointResult> {
-        self.map_queries(queries, par, |ev, q| ev.project(q))
+        self.map_clusters(queries, par, |ev, cluster| {
+            cluster
+                .iter()
+                .map(|&i| (i, ev.project(&queries[i])))
+                .collect()
+        })
+    }
+
+    /// Runs `run` on clusters of [`CLUSTER`] queries (indices into `queries`) taken in Morton
+    /// order, so that a cluster's queries are close together and consecutive clusters touch
+    /// neighbouring samples, and returns the results in query order.
+    fn map_clusters<F>(&self, queries: &[Point], par: Parallelism, run: F) -> Vec<PointResult>
+    where
+        F: Fn(&mut Evaluator<'_>, &[usize]) -> Vec<(usize, PointResult)> + Sync,
+    {
+        let half_extent = queries
+            .iter()
+            .filter(|q| q.iter().all(|c| c.is_finite()))
+            .fold(0.0f64, |m, q| m.max((q - self.origin).coords.amax()));
+        let key = |i: &usize| morton_key(&(queries[*i] - self.origin), half_extent);
+        let mut order: Vec<usize> = (0..queries.len()).collect();
+        let pairs: Vec<(usize, PointResult)> = match par {
+            Parallelism::Sequential => {
+                order.sort_by_cached_key(key);
+                let mut ev = self.evaluator();
+                order
+                    .chunks(CLUSTER)
+                    .flat_map(|c| run(&mut ev, c))
+                    .collect()
+            }
+            Parallelism::Rayon => {
+                order.par_sort_by_cached_key(key);
+                order
+                    .par_chunks(CLUSTER)
+                    .map_init(|| self.evaluator(), |ev, c| run(ev, c))
+                    .flatten_iter()
+                    .collect()
+            }
+        };
+        let mut out = vec![Err(PointStatus::InvalidQuery); queries.len()];
+        for (i, r) in pairs {
+            out[i] = r;
+        }
+        out
     }
 
     /// Appends to `out` the samples within `radius` of `x` (internal frame), in tree order.
@@ -235,7 +284,8 @@ impl MlsSurface {
     }
 }
 
-/// Queries sharing one neighbour search in [`MlsSurface::curvature_at_points`].
+/// Queries sharing one neighbour search in [`MlsSurface::curvature_at_points`]; also the unit
+/// of work of [`MlsSurface::project_points`].
 const CLUSTER: usize = 16;
 
 /// The Morton (Z-order) key of a point in the cube `[−half_extent, half_extent]³`, 21 bits per

@@ -203,14 +203,7 @@ fn orient_along_tree(
                 Some((u64::from(w.to_bits()) << 32) | (i * k + slot) as u64)
             })
     };
-    let mut keys: Vec<u64> = match par {
-        Parallelism::Sequential => (0..n).flat_map(keys_of).collect(),
-        Parallelism::Rayon => (0..n)
-            .into_par_iter()
-            .with_min_len(1024)
-            .flat_map_iter(keys_of)
-            .collect(),
-    };
+    let mut keys = edge_keys(n, par, keys_of);
     match par {
         Parallelism::Sequential => keys.sort_unstable(),
         Parallelism::Rayon => keys.par_sort_unstable(),
@@ -283,6 +276,48 @@ fn orient_along_tree(
         }
     }
     (components, flipped)
+}
+
+/// Points per block of [`edge_keys`].
+const KEY_BLOCK: usize = 4096;
+
+/// The keys `keys_of(i)` of every point `i < n`, in point order, written in place.
+///
+/// A rayon `flat_map_iter(..).collect()` of an unknown total length collects per-thread
+/// vectors and then copies them into the result, so the keys (8 bytes per edge, about half
+/// the neighbour graph) were held twice at the peak of the orientation. Here the keys are
+/// counted per block of points first, then each block fills its own slice of one vector of
+/// the exact length.
+fn edge_keys<F, I>(n: usize, par: Parallelism, keys_of: F) -> Vec<u64>
+where
+    F: Fn(usize) -> I + Sync,
+    I: Iterator<Item = u64>,
+{
+    let block = |b: usize| b * KEY_BLOCK..((b + 1) * KEY_BLOCK).min(n);
+    let blocks = n.div_ceil(KEY_BLOCK);
+    let count = |b: usize| block(b).map(|i| keys_of(i).count()).sum::<usize>();
+    let counts: Vec<usize> = match par {
+        Parallelism::Sequential => (0..blocks).map(count).collect(),
+        Parallelism::Rayon => (0..blocks).into_par_iter().map(count).collect(),
+    };
+    let mut keys = vec![0_u64; counts.iter().sum()];
+    let mut slices: Vec<(usize, &mut [u64])> = Vec::with_capacity(blocks);
+    let mut rest = keys.as_mut_slice();
+    for (b, &c) in counts.iter().enumerate() {
+        let (head, tail) = rest.split_at_mut(c);
+        slices.push((b, head));
+        rest = tail;
+    }
+    let fill = |(b, out): (usize, &mut [u64])| {
+        for (slot, key) in out.iter_mut().zip(block(b).flat_map(&keys_of)) {
+            *slot = key;
+        }
+    };
+    match par {
+        Parallelism::Sequential => slices.into_iter().for_each(fill),
+        Parallelism::Rayon => slices.into_par_iter().for_each(fill),
+    }
+    keys
 }
 
 fn flip(e: &mut Result<NormalEstimate, PointStatus>) {

@@ -107,3 +107,49 @@ fn projection_of_a_far_point_is_a_status() {
     let nan = surface.evaluator().project(&Point::new(f64::NAN, 0.0, 0.0));
     assert_eq!(nan.err(), Some(PointStatus::InvalidQuery));
 }
+
+/// Seed of the shuffle and the offsets in [`projection_in_morton_order_equals_per_query`].
+const SHUFFLE_SEED: u64 = 0x5eed_c1a5;
+
+/// `project_points` takes the queries in Morton order, in clusters; each query must still land
+/// exactly where [`mls_core::Evaluator::project`] takes it on its own, and come back in input
+/// order. Queries in random order, some on the samples, some up to 0.9h off, plus an invalid
+/// and a far query.
+#[test]
+fn projection_in_morton_order_equals_per_query() {
+    use mls_core::Parallelism;
+    use rand::seq::SliceRandom;
+    use rand::{Rng, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    let n = 4000;
+    let (pts, nrm) = fibonacci_sphere(n, 1.0);
+    let mut rng = ChaCha8Rng::seed_from_u64(SHUFFLE_SEED);
+    let mut order: Vec<usize> = (0..n).collect();
+    order.shuffle(&mut rng);
+    let (pts, nrm): (Vec<Point>, Vec<Vector>) = order.iter().map(|&i| (pts[i], nrm[i])).unzip();
+    let h = 2.0 * (4.0 * std::f64::consts::PI / n as f64).sqrt();
+    let surface = MlsSurface::new(&pts, &nrm, MlsConfig::new(h)).unwrap();
+    let mut queries: Vec<Point> = pts
+        .iter()
+        .zip(&nrm)
+        .enumerate()
+        .map(|(i, (p, v))| match i % 3 {
+            0 => *p,
+            _ => p + v * (h * rng.random_range(-0.9..0.9)),
+        })
+        .collect();
+    queries.extend([Point::new(f64::NAN, 0.0, 0.0), Point::new(0.0, 0.0, 50.0)]);
+
+    let mut ev = surface.evaluator();
+    let alone: Vec<_> = queries.iter().map(|q| ev.project(q)).collect();
+    assert!(alone[..n].iter().all(|r| r.is_ok()));
+    assert_eq!(alone[n], Err(PointStatus::InvalidQuery));
+    assert_eq!(alone[n + 1], Err(PointStatus::NoNeighbours));
+    for par in [Parallelism::Sequential, Parallelism::Rayon] {
+        assert!(
+            surface.project_points(&queries, par) == alone,
+            "{par:?} differs from per-query projection"
+        );
+    }
+}
