@@ -123,8 +123,8 @@ impl FieldScratch {
         if self.blocks.len() < needed {
             self.blocks.resize(needed, Block::default());
         }
+        let blocks = &mut self.blocks[..needed];
         let mut len = 0;
-        let mut shift = f64::INFINITY;
         for s in samples {
             let e = x - s.point;
             let keep = !(e.norm_squared() > radius2);
@@ -132,28 +132,34 @@ impl FieldScratch {
             // sum is then of order one at any scale of the cloud, and no power of 1/h² can
             // overflow (a² alone overflows for h below about 1e-77).
             let d = e * inv_h;
-            let d2 = d.norm_squared();
-            let (block, lane) = (&mut self.blocks[len / LANES], len % LANES);
-            for k in 0..3 {
-                block.d[k][lane] = d[k];
-                block.normal[k][lane] = s.normal[k];
-            }
-            block.w[lane] = d2;
-            if keep {
-                shift = shift.min(d2);
-            }
+            let (block, lane) = (&mut blocks[len / LANES], len % LANES);
+            block.d[0][lane] = d.x;
+            block.d[1][lane] = d.y;
+            block.d[2][lane] = d.z;
+            block.normal[0][lane] = s.normal.x;
+            block.normal[1][lane] = s.normal.y;
+            block.normal[2][lane] = s.normal.z;
+            block.w[lane] = d.norm_squared();
             len += usize::from(keep);
         }
         // The free lanes of the last block: exp(−∞) = 0 makes their weights exactly zero.
-        let end = len.div_ceil(LANES) * LANES;
-        for slot in len..end {
-            let (block, lane) = (&mut self.blocks[slot / LANES], slot % LANES);
+        let end = len.div_ceil(LANES);
+        for slot in len..end * LANES {
+            let (block, lane) = (&mut blocks[slot / LANES], slot % LANES);
             for k in 0..3 {
                 block.d[k][lane] = 0.0;
                 block.normal[k][lane] = 0.0;
             }
             block.w[lane] = f64::INFINITY;
         }
+        // The shift δ²/h², outside the loop above so that it has no branch.
+        let mut nearest = [f64::INFINITY; LANES];
+        for block in &blocks[..end] {
+            for (m, &w) in nearest.iter_mut().zip(&block.w) {
+                *m = if w < *m { w } else { *m };
+            }
+        }
+        let shift = nearest.into_iter().fold(f64::INFINITY, f64::min);
         self.len = len;
         self.inv_h2 = inv_h2;
         self.shift = shift;
