@@ -2,7 +2,8 @@
 //! `valgrind --tool=callgrind --toggle-collect='*curvature_at_points*' \
 //!   target/release/examples/curvature_count 50000`
 //! then divide the collected instructions by the point count. Callgrind's counts are
-//! deterministic, unlike wall-clock time on a shared machine.
+//! deterministic, unlike wall-clock time on a shared machine. With a second argument
+//! `rayon`, the run is parallel and also timed (best of three, wall clock).
 
 use std::hint::black_box;
 
@@ -16,7 +17,18 @@ fn main() {
     let cloud = Cloud::sphere(n);
     let h = default_h(&cloud.points);
     let surface = cloud.surface(h, Cutoff::DEFAULT);
-    let results = surface.curvature_at_points(black_box(&cloud.points), Parallelism::Sequential);
+    let par = match std::env::args().nth(2).as_deref() {
+        Some("rayon") => Parallelism::Rayon,
+        _ => Parallelism::Sequential,
+    };
+    let mut results = Vec::new();
+    let mut best = f64::INFINITY;
+    for _ in 0..if par == Parallelism::Rayon { 3 } else { 1 } {
+        let start = std::time::Instant::now();
+        results = surface.curvature_at_points(black_box(&cloud.points), par);
+        best = best.min(start.elapsed().as_secs_f64());
+    }
+    println!("{:.0} points/s ({par:?}, best run)", n as f64 / best);
     let ok = results.iter().filter(|r| r.is_ok()).count();
     let mean: f64 = results
         .iter()
