@@ -42,31 +42,33 @@ const MAX_LINEAR_SLOPE: f64 = 1.1;
 /// Counting rules: one flop per f64 add, subtract, multiply or divide (a fused multiply-add
 /// counts as two); comparisons, min and sign changes count as none. Lengths are in units of h
 /// (`d = (x − q)/h`, formed once per neighbour and reused by both passes), so `a = 1` and products by
-/// `a` or constants of it fold away at compile time. `exp` counts as [`EXP_FLOPS`] (glibc's
-/// `exp`: range reduction, a table lookup and a degree-5 polynomial, about 15 operations).
+/// `a` or constants of it fold away at compile time. `exp` counts as [`EXP_FLOPS`] (field.rs's
+/// own branch-free `exp_weight`: range reduction, a degree-5 polynomial in a rational form with
+/// one division, and the scaling by 2^k, 28 operations).
 /// Per-point work (the 3 × 3 algebra after the loops, the curvature, the neighbour query) is
-/// not in this count.
+/// not in this count, nor are the candidates beyond the cutoff that the curvature path tests
+/// and rejects (about a third more than the neighbours on a sphere; each costs the first row).
 const FLOPS_PER_NEIGHBOUR: &[(&str, u32)] = &[
     (
-        "offset d = (x − q)/h and ‖d‖² (3 sub, 3 mul, 3 mul, 2 add)",
-        11,
+        "offset e = x − q and the cutoff test ‖e‖² (3 sub, 3 mul, 2 add), d = e/h (3 mul), ‖d‖² (3 mul, 2 add)",
+        16,
     ),
     ("shifted weight exp(−(‖d‖² − δ²)) (sub; exp)", 1 + EXP_FLOPS),
+    ("d dᵀ, shared by both passes (6 mul)", 6),
     (
-        "pass 1, normal field: w v (3), m += (3), S1 += w v dᵀ (18), d dᵀ (6), three S2_c += w v_c d dᵀ (36), Σw (1)",
-        67,
+        "pass 1, normal field: w v_c (3), and for each c the moments Σ w v_c (1), Σ w v_c d (6), Σ w v_c d dᵀ (12), so m, S1 and S2_c (57); Σw (1)",
+        61,
     ),
     (
-        "pass 2, g sums: B = d·n (5), B² (1), α = 2B(B² − 1) (3), β = 1 − 3B² (2), 2w (1), g += 2w(B − B³) (4), c_dd (1), c_sym (2), c_bb (1), d dᵀ (6), Σα, Σαd, Σβ, Σβd (16), Q_dd (13), V_sym (7), Q_sym (12), S_bb (2), V_bb (6), Q_bb (12)",
-        94,
+        "pass 2, g sums: B = d·n (5), B² (1), α = 2B(B² − 1) (3), β = 1 − 3B² (2), 2w (1), c_sym (2), c_bb (1), the coefficients 2wα, 2wβ, 2w c_sym, 2w c_bb (4); moments of 2wα, 2w c_sym, 2w c_bb (19 each: Σ c, Σ c d, Σ c d dᵀ) and of 2wβ (7: Σ c, Σ c d)",
+        83,
     ),
-    ("Σw for the gradient test", 1),
 ];
 /// The flops of one `exp`.
-const EXP_FLOPS: u32 = 15;
+const EXP_FLOPS: u32 = 28;
 /// FNV-1a hash of the `field.rs` that [`FLOPS_PER_NEIGHBOUR`] was counted from. When the
 /// compiled file ([`FIELD_RS`]) differs, the report says that the count may be stale.
-const FLOPS_COUNTED_HASH: u64 = 0xcaf0_b9f3_88e4_d995;
+const FLOPS_COUNTED_HASH: u64 = 0x31f6_40a4_ba80_37ce;
 
 /// The `field.rs` this binary was compiled with (cargo rebuilds the xtask when it changes).
 const FIELD_RS: &[u8] = include_bytes!(concat!(
@@ -1288,7 +1290,8 @@ fn render(
          flop per f64 add, subtract or multiply (none for comparisons, min or sign changes); \
          lengths are in units of h, so a = 1/h² is 1 and its products fold away at compile \
          time, while the 3 multiplies of each d = (x − q)/h are counted; `exp` as {EXP_FLOPS} \
-         (glibc: range reduction, table, degree-5 polynomial). The neighbour query, the \
+         (field.rs's branch-free `exp_weight`: range reduction, degree-5 polynomial, one division, \
+         scaling by 2^k). The neighbour query, the \
          per-point 3 × 3 algebra and the curvature are not counted.\n"
     );
     let _ = writeln!(w, "| part | flops |\n| --- | --- |");

@@ -6,7 +6,7 @@ use rayon::prelude::*;
 
 use crate::curvature::{Curvature, curvature};
 use crate::error::ConfigError;
-use crate::field::{FieldScratch, Implicit, Sample, evaluate};
+use crate::field::{FieldScratch, Implicit, Sample, evaluate, evaluate_loaded};
 use crate::kernel::{Cutoff, Kernel};
 use crate::math::{Point, UnitNormal, Vector, bounding_box_centre};
 use crate::projection::{LineSample, ProjectionConfig, line_minimum};
@@ -374,7 +374,7 @@ impl Evaluator<'_> {
 
     /// Curvature at the world-space queries `queries[i]` for `i` in `cluster`: one neighbour
     /// search around the cluster, then each query's support filtered from it. Clusters spread
-    /// wider than the support radius fall back to one search per query.
+    /// wider than the support radius are split in halves.
     fn curvature_of_cluster(
         &mut self,
         queries: &[Point],
@@ -396,17 +396,27 @@ impl Evaluator<'_> {
             .map(|&i| &queries[i])
             .filter(|q| finite(q))
             .fold(0.0f64, |m, q| m.max(((q - origin) - centre).norm()));
-        if count == 0 || spread > radius {
+        if count == 0 {
             return cluster
                 .iter()
                 .map(|&i| (i, self.curvature_at(&queries[i])))
                 .collect();
+        }
+        if spread > radius * 0.25 {
+            // A jump of the Morton curve: each half is compact again (a single query has
+            // spread 0).
+            let (left, right) = cluster.split_at(cluster.len() / 2);
+            let mut out = self.curvature_of_cluster(queries, left, radius);
+            out.extend(self.curvature_of_cluster(queries, right, radius));
+            return out;
         }
         self.candidates.clear();
         let s = self.surface;
         let reach = radius + spread;
         s.samples_within(&centre, reach, &mut self.candidates);
         let r2 = radius * radius;
+        let inv_h2 = s.kernel.inv_h2();
+        let min_neighbours = s.config.min_neighbours;
         cluster
             .iter()
             .map(|&i| {
@@ -415,14 +425,16 @@ impl Evaluator<'_> {
                     return (i, Err(PointStatus::InvalidQuery));
                 }
                 let local = x - origin;
-                self.support.clear();
-                let support = &mut self.support;
-                support.extend(
-                    self.candidates
-                        .iter()
-                        .filter(|c| (local - c.point).norm_squared() <= r2),
-                );
-                let result = self.implicit_at_local(&local).and_then(|implicit| {
+                // Each query's support, straight into the evaluation's own storage.
+                let found = self.scratch.load(&local, &self.candidates, r2, inv_h2);
+                let result = if found == 0 {
+                    Err(PointStatus::NoNeighbours)
+                } else if found < min_neighbours {
+                    Err(PointStatus::TooFewNeighbours)
+                } else {
+                    evaluate_loaded(&mut self.scratch)
+                }
+                .and_then(|implicit| {
                     let curvature = curvature(&implicit.gradient, &implicit.hessian)
                         .ok_or(PointStatus::GradientVanishes)?;
                     Ok(SurfacePoint {
