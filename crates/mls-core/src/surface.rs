@@ -167,38 +167,9 @@ impl MlsSurface {
         let Some(radius) = self.kernel.support_radius() else {
             return self.map_queries(queries, par, |ev, q| ev.curvature_at(q));
         };
-        let half_extent = queries
-            .iter()
-            .filter(|q| q.iter().all(|c| c.is_finite()))
-            .fold(0.0f64, |m, q| m.max((q - self.origin).coords.amax()));
-        let key = |i: &usize| morton_key(&(queries[*i] - self.origin), half_extent);
-        let mut order: Vec<usize> = (0..queries.len()).collect();
-        let run = |ev: &mut Evaluator<'_>, cluster: &[usize]| {
+        self.map_clusters(queries, par, |ev, cluster| {
             ev.curvature_of_cluster(queries, cluster, radius)
-        };
-        let pairs: Vec<(usize, PointResult)> = match par {
-            Parallelism::Sequential => {
-                order.sort_by_cached_key(key);
-                let mut ev = self.evaluator();
-                order
-                    .chunks(CLUSTER)
-                    .flat_map(|c| run(&mut ev, c))
-                    .collect()
-            }
-            Parallelism::Rayon => {
-                order.par_sort_by_cached_key(key);
-                order
-                    .par_chunks(CLUSTER)
-                    .map_init(|| self.evaluator(), |ev, c| run(ev, c))
-                    .flatten_iter()
-                    .collect()
-            }
-        };
-        let mut out = vec![Err(PointStatus::InvalidQuery); queries.len()];
-        for (i, r) in pairs {
-            out[i] = r;
-        }
-        out
+        })
     }
 
     /// Projects each query point onto the MLS surface and evaluates curvature there.
