@@ -232,6 +232,11 @@ fn sci(x: f64) -> String {
     }
 }
 
+/// `μ ± σ` of an error.
+fn pm((mean, std): (f64, f64)) -> String {
+    format!("{} ± {std:.2e}", sci(mean))
+}
+
 fn ratio(ours: f64, paper: f64) -> String {
     if paper.abs() > 0.0 {
         let r = ours.abs() / paper.abs();
@@ -827,17 +832,12 @@ fn density_study(quick: bool, md: &mut String, fig_dir: &Path) -> Result<()> {
             .0;
         writeln!(
             md,
-            "| {n} | {h:.4} | {} ± {:.2e} | {} ± {:.2e} | k1 {} ± {:.2e} | {} ± {:.2e} | {} ± {:.2e} |",
-            sci(fi.k1.0),
-            fi.k1.1,
-            sci(fi.k2.0),
-            fi.k2.1,
-            sci(fp.k1.0),
-            fp.k1.1,
-            sci(ap.k1.0),
-            ap.k1.1,
-            sci(ap.k2.0),
-            ap.k2.1
+            "| {n} | {h:.4} | {} | {} | k1 {} | {} | {} |",
+            pm(fi.k1),
+            pm(fi.k2),
+            pm(fp.k1),
+            pm(ap.k1),
+            pm(ap.k2)
         )?;
         let x = n as f64;
         series[0].points.push((x, fi.k1.1));
@@ -881,15 +881,11 @@ fn h_study(quick: bool, md: &mut String) -> Result<()> {
                 .0;
             writeln!(
                 md,
-                "| {sigma:e} | {factor} | {} ± {:.2e} | {} ± {:.2e} | {} ± {:.2e} | {} ± {:.2e} |",
-                sci(i.k1.0),
-                i.k1.1,
-                sci(i.k2.0),
-                i.k2.1,
-                sci(p.k1.0),
-                p.k1.1,
-                sci(p.k2.0),
-                p.k2.1
+                "| {sigma:e} | {factor} | {} | {} | {} | {} |",
+                pm(i.k1),
+                pm(i.k2),
+                pm(p.k1),
+                pm(p.k2)
             )?;
         }
     }
@@ -930,12 +926,7 @@ fn cutoff_study(quick: bool, md: &mut String) -> Result<()> {
             }
         }
         let e = case.errors(&out, false).0;
-        writeln!(
-            md,
-            "| {c}h | {d1:.1e} | {d2:.1e} | {} ± {:.2e} |",
-            sci(e.k1.0),
-            e.k1.1
-        )?;
+        writeln!(md, "| {c}h | {d1:.1e} | {d2:.1e} | {} |", pm(e.k1))?;
     }
     md.push('\n');
     Ok(())
