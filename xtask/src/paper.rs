@@ -10,8 +10,8 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result, bail};
 use mls_core::normals::{DEFAULT_SPACING_NEIGHBOURS, spacing_statistics};
 use mls_core::{
-    AdaptiveConfig, Cutoff, Location, MlsConfig, MlsSurface, NormalsConfig, Parallelism, Point,
-    Vector, adaptive_curvature, correct_shrinkage, estimate_normals,
+    AdaptiveConfig, Curvature, Cutoff, Location, MlsConfig, MlsSurface, NormalsConfig, Parallelism,
+    Point, PointResult, Vector, adaptive_curvature, correct_shrinkage, estimate_normals,
 };
 use mls_shapes::{BSplineSurface, Cylinder, ParametricSurface, Torus, closest_point_newton};
 
@@ -122,6 +122,12 @@ impl Case {
         )
     }
 
+    /// Errors of one fixed-h evaluation with the exact normals.
+    fn fixed_errors(&self, h: f64, at: Location) -> Result<Errors> {
+        let out = fixed(self, &self.exact, MlsConfig::new(h), at)?;
+        Ok(self.errors(&out, at == Location::Projected).0)
+    }
+
     fn query_points(&self, points: &[Point]) -> Vec<Point> {
         self.queries.iter().map(|&i| points[i]).collect()
     }
@@ -156,58 +162,42 @@ fn estimated_normals(points: &[Point], exact: &[Vector], h: f64) -> Result<Vec<V
     })
 }
 
-fn fixed(
-    case: &Case,
-    points: &[Point],
-    normals: &[Vector],
-    h: f64,
-    at: Location,
-) -> Result<Outcome> {
-    fixed_with(case, points, normals, MlsConfig::new(h), at)
+/// Curvature at the queries of `case` on the surface of the given normals and configuration.
+fn fixed(case: &Case, normals: &[Vector], config: MlsConfig, at: Location) -> Result<Outcome> {
+    let surface = MlsSurface::new(&case.points, normals, config)?;
+    Ok(outcome(
+        &evaluate_fixed(case, &surface, at),
+        config.h,
+        |c| *c,
+    ))
 }
 
-fn fixed_with(
-    case: &Case,
-    points: &[Point],
-    normals: &[Vector],
-    config: MlsConfig,
-    at: Location,
-) -> Result<Outcome> {
-    let surface = MlsSurface::new(points, normals, config)?;
-    let q = case.query_points(points);
-    let results = match at {
+/// The surface's results at the queries of `case`.
+fn evaluate_fixed(case: &Case, surface: &MlsSurface, at: Location) -> Vec<PointResult> {
+    let q = case.query_points(&case.points);
+    match at {
         Location::Input => surface.curvature_at_points(&q, Parallelism::Rayon),
         Location::Projected => surface.project_points(&q, Parallelism::Rayon),
-    };
-    Ok(results
-        .iter()
-        .map(|r| {
-            r.as_ref()
-                .ok()
-                .map(|s| (s.point, s.curvature.k1, s.curvature.k2, config.h))
-        })
-        .collect())
+    }
 }
 
-fn corrected(case: &Case, points: &[Point], normals: &[Vector], h: f64) -> Result<Outcome> {
-    let surface = MlsSurface::new(points, normals, MlsConfig::new(h))?;
-    let q = case.query_points(points);
-    Ok(surface
-        .project_points(&q, Parallelism::Rayon)
+/// Results at scale `h` as an [`Outcome`], each curvature passed through `adjust`.
+fn outcome(results: &[PointResult], h: f64, adjust: impl Fn(&Curvature) -> Curvature) -> Outcome {
+    results
         .iter()
         .map(|r| {
             r.as_ref().ok().map(|s| {
-                let c = correct_shrinkage(&s.curvature, h);
+                let c = adjust(&s.curvature);
                 (s.point, c.k1, c.k2, h)
             })
         })
-        .collect())
+        .collect()
 }
 
-fn adaptive(case: &Case, points: &[Point], normals: &[Vector], at: Location) -> Result<Outcome> {
-    let q = case.query_points(points);
+fn adaptive(case: &Case, normals: &[Vector], at: Location) -> Result<Outcome> {
+    let q = case.query_points(&case.points);
     let results = adaptive_curvature(
-        points,
+        &case.points,
         normals,
         &q,
         at,
@@ -387,23 +377,24 @@ fn patch_case(
 ) -> Case {
     let grid = mls_shapes::grid(&surface, n, n);
     // Away from the open boundary, where the MLS surface curls (the paper does not say how it
-    // treats the boundary).
-    let margin = |uv: f64, lo: f64, hi: f64| uv - lo > 0.0 && hi - uv > 0.0;
+    // treats the boundary): farther than 5h from the four boundary points of the sample's
+    // parameter lines.
     let [du, dv] = surface.domain();
     let bound = 5.0 * h;
+    let at = |u: f64, v: f64| mls_shapes::position(&surface, u, v);
     let queries = grid
         .iter()
         .enumerate()
         .filter(|(_, s)| {
-            let p = s.surface.point;
-            let c0 = surface.at(du.lerp(0.0), s.uv[1]).point;
-            let c1 = surface.at(du.lerp(1.0), s.uv[1]).point;
-            let r0 = surface.at(s.uv[0], dv.lerp(0.0)).point;
-            let r1 = surface.at(s.uv[0], dv.lerp(1.0)).point;
-            margin((p - c0).norm(), bound, f64::INFINITY)
-                && margin((p - c1).norm(), bound, f64::INFINITY)
-                && margin((p - r0).norm(), bound, f64::INFINITY)
-                && margin((p - r1).norm(), bound, f64::INFINITY)
+            let [u, v] = s.uv;
+            [
+                at(du.lerp(0.0), v),
+                at(du.lerp(1.0), v),
+                at(u, dv.lerp(0.0)),
+                at(u, dv.lerp(1.0)),
+            ]
+            .iter()
+            .all(|b| (s.surface.point - b).norm() > bound)
         })
         .map(|(k, _)| k)
         .step_by(97)
@@ -484,32 +475,24 @@ fn shape_rows(case: &Case, md: &mut String) -> Result<(Maps, Errors, Errors)> {
     let mut best_fixed = Errors::default();
     let mut best_adaptive = Errors::default();
     for (label, normals) in [("exact", &case.exact), ("estimated", &estimated)] {
+        // One surface for the three fixed-h rows; the corrected row reuses the projection.
+        let surface = MlsSurface::new(&case.points, normals, MlsConfig::new(h))?;
+        let input = evaluate_fixed(case, &surface, Location::Input);
+        let projected = evaluate_fixed(case, &surface, Location::Projected);
         let variants: Vec<(&str, Outcome, bool)> = vec![
-            (
-                "input",
-                fixed(case, &case.points, normals, h, Location::Input)?,
-                false,
-            ),
-            (
-                "projected",
-                fixed(case, &case.points, normals, h, Location::Projected)?,
-                true,
-            ),
+            ("input", outcome(&input, h, |c| *c), false),
+            ("projected", outcome(&projected, h, |c| *c), true),
             (
                 "projected, shrinkage corrected",
-                corrected(case, &case.points, normals, h)?,
+                outcome(&projected, h, |c| correct_shrinkage(c, h)),
                 true,
             ),
         ];
         let adaptive_variants: Vec<(&str, Outcome, bool)> = vec![
-            (
-                "input",
-                adaptive(case, &case.points, normals, Location::Input)?,
-                false,
-            ),
+            ("input", adaptive(case, normals, Location::Input)?, false),
             (
                 "projected",
-                adaptive(case, &case.points, normals, Location::Projected)?,
+                adaptive(case, normals, Location::Projected)?,
                 true,
             ),
         ];
@@ -812,23 +795,10 @@ fn density_study(quick: bool, md: &mut String, fig_dir: &Path) -> Result<()> {
             None,
             String::new(),
         );
-        let fi = case
-            .errors(
-                &fixed(&case, &case.points, &case.exact, h, Location::Input)?,
-                false,
-            )
-            .0;
-        let fp = case
-            .errors(
-                &fixed(&case, &case.points, &case.exact, h, Location::Projected)?,
-                true,
-            )
-            .0;
+        let fi = case.fixed_errors(h, Location::Input)?;
+        let fp = case.fixed_errors(h, Location::Projected)?;
         let ap = case
-            .errors(
-                &adaptive(&case, &case.points, &case.exact, Location::Projected)?,
-                true,
-            )
+            .errors(&adaptive(&case, &case.exact, Location::Projected)?, true)
             .0;
         writeln!(
             md,
@@ -867,18 +837,8 @@ fn h_study(quick: bool, md: &mut String) -> Result<()> {
                 .spacing;
         for factor in [1.0, 1.5, 2.0, 3.0, 4.0] {
             let h = factor * spacing;
-            let i = case
-                .errors(
-                    &fixed(&case, &case.points, &case.exact, h, Location::Input)?,
-                    false,
-                )
-                .0;
-            let p = case
-                .errors(
-                    &fixed(&case, &case.points, &case.exact, h, Location::Projected)?,
-                    true,
-                )
-                .0;
+            let i = case.fixed_errors(h, Location::Input)?;
+            let p = case.fixed_errors(h, Location::Projected)?;
             writeln!(
                 md,
                 "| {sigma:e} | {factor} | {} | {} | {} | {} |",
@@ -897,9 +857,8 @@ fn h_study(quick: bool, md: &mut String) -> Result<()> {
 fn cutoff_study(quick: bool, md: &mut String) -> Result<()> {
     md.push_str("## The kernel cutoff: the torus at the paper's h\n\nChange of k1 and k2 against the untruncated kernel (every sample contributes), at the input points, exact normals.\n\n| cutoff | max abs change of k1 | of k2 | k1 error μ ± σ |\n| --- | --- | --- | --- |\n");
     let case = torus_case(quick, 0.0);
-    let reference = fixed_with(
+    let reference = fixed(
         &case,
-        &case.points,
         &case.exact,
         MlsConfig {
             cutoff: Cutoff::None,
@@ -908,9 +867,8 @@ fn cutoff_study(quick: bool, md: &mut String) -> Result<()> {
         Location::Input,
     )?;
     for c in [3.0, 4.0, 5.0, 6.0, 7.0] {
-        let out = fixed_with(
+        let out = fixed(
             &case,
-            &case.points,
             &case.exact,
             MlsConfig {
                 cutoff: Cutoff::Radius(c),

@@ -192,7 +192,7 @@ pub fn curvature(a: CurvatureArgs) -> Result<()> {
                     "  h               adaptive, per point from {:.6} ({}) to {:.6}",
                     scale.h,
                     scale.why,
-                    AdaptiveConfig::new(scale.h).scale(AdaptiveConfig::new(scale.h).scales - 1)
+                    AdaptiveConfig::new(scale.h).h_max()
                 );
                 eprintln!("  chosen h        {}", pipeline::percentiles(&out.h));
                 eprintln!("  noise estimate  {}", pipeline::percentiles(&out.noise));

@@ -86,6 +86,11 @@ impl AdaptiveConfig {
     pub fn scale(&self, j: usize) -> f64 {
         self.h_min * SCALE_RATIO.powi(j as i32)
     }
+
+    /// The largest scale of the ladder.
+    pub fn h_max(&self) -> f64 {
+        self.scale(self.scales.max(2) - 1)
+    }
 }
 
 /// The adaptive estimate at one query point.
