@@ -40,11 +40,11 @@ const FAULTS: &[Fault] = &[
         replacement: ";",
     },
     Fault {
-        name: "F4 coefficient 6 → 5",
-        description: "(6B²/h⁴ − 2/h²) written (5B²/h⁴ − 2/h²) in the C·(∂B/∂x)ᵀ term of Eq. 8",
+        name: "F4 sign of (6B²/h⁴ − 2/h²)",
+        description: "the C·(∂B/∂x)ᵀ coefficient of Eq. 8, (6B²/h⁴ − 2/h²) = −2β/h², taken as +2β/h²",
         file: "crates/mls-core/src/field.rs",
-        original: "let c_sym = 6.0 * a * a * b2 - 2.0 * a;",
-        replacement: "let c_sym = 5.0 * a * a * b2 - 2.0 * a;",
+        original: "(sum_beta_d * (-2.0 * a), beta.second.matrix() * (-2.0 * a))",
+        replacement: "(sum_beta_d * (2.0 * a), beta.second.matrix() * (2.0 * a))",
     },
     Fault {
         name: "F5 coefficient 12 → 6",

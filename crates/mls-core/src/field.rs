@@ -74,8 +74,11 @@ impl Implicit {
 
 /// Samples per [`Block`]: the per-neighbour sums run on `LANES` independent partial sums,
 /// which the compiler turns into SIMD operations (the sums of one lane are then added at the
-/// end, a different order than one running sum: results change by rounding only).
-const LANES: usize = 2;
+/// end, a different order than one running sum: results change by rounding only). Four lanes
+/// fill an AVX2 register; without AVX2 they take two SSE2 registers each. The count is the
+/// same on every CPU, and no code path fuses a multiply and an add, so results are bitwise
+/// the same whichever [`Kernels`] run.
+const LANES: usize = 4;
 
 /// One value per lane.
 type Lanes = [f64; LANES];
@@ -93,8 +96,9 @@ struct Block {
     w: Lanes,
     /// The distinct entries of `d dᵀ`: xx, xy, xz, yy, yz, zz.
     dd: [Lanes; 6],
-    /// The second pass's per-sample coefficients `2w·α`, `2w·β`, `2w·c_sym`, `2w·c_bb`.
-    coef: [Lanes; 4],
+    /// The per-sample coefficients whose moments are summed: `w·v_x`, `w·v_y`, `w·v_z` in the
+    /// first pass, then `2w·α`, `2w·β`, `2w·c_bb` in the second.
+    coef: [Lanes; 3],
 }
 
 /// Reusable per-thread storage so that evaluation does not allocate: the loaded samples in
@@ -116,7 +120,6 @@ impl FieldScratch {
     /// normals, ready for [`evaluate_loaded`]. The distance test is on `|x − q|²`, in the
     /// units of the points.
     pub fn load(&mut self, x: &Point, samples: &[Sample], radius2: f64, inv_h2: f64) -> usize {
-        let inv_h = inv_h2.sqrt();
         // Every sample is written to the next free slot and kept by advancing the count (no
         // branch on the distance test), so one slot past the last sample must exist.
         let needed = samples.len() / LANES + 1;
@@ -124,47 +127,65 @@ impl FieldScratch {
             self.blocks.resize(needed, Block::default());
         }
         let blocks = &mut self.blocks[..needed];
-        let mut len = 0;
-        for s in samples {
-            let e = x - s.point;
-            let keep = !(e.norm_squared() > radius2);
-            // Lengths are in units of h from here on (d ← d/h, so a = 1/h² becomes 1): every
-            // sum is then of order one at any scale of the cloud, and no power of 1/h² can
-            // overflow (a² alone overflows for h below about 1e-77).
-            let d = e * inv_h;
-            let (block, lane) = (&mut blocks[len / LANES], len % LANES);
-            block.d[0][lane] = d.x;
-            block.d[1][lane] = d.y;
-            block.d[2][lane] = d.z;
-            block.normal[0][lane] = s.normal.x;
-            block.normal[1][lane] = s.normal.y;
-            block.normal[2][lane] = s.normal.z;
-            block.w[lane] = d.norm_squared();
-            len += usize::from(keep);
-        }
-        // The free lanes of the last block: exp(−∞) = 0 makes their weights exactly zero.
-        let end = len.div_ceil(LANES);
-        for slot in len..end * LANES {
-            let (block, lane) = (&mut blocks[slot / LANES], slot % LANES);
-            for k in 0..3 {
-                block.d[k][lane] = 0.0;
-                block.normal[k][lane] = 0.0;
-            }
-            block.w[lane] = f64::INFINITY;
-        }
-        // The shift δ²/h², outside the loop above so that it has no branch.
-        let mut nearest = [f64::INFINITY; LANES];
-        for block in &blocks[..end] {
-            for (m, &w) in nearest.iter_mut().zip(&block.w) {
-                *m = if w < *m { w } else { *m };
-            }
-        }
-        let shift = nearest.into_iter().fold(f64::INFINITY, f64::min);
+        let (len, shift) = match Isa::detect() {
+            #[cfg(target_arch = "x86_64")]
+            Isa::Avx2(k) => k.load(blocks, x, samples, radius2, inv_h2),
+            Isa::Portable(k) => k.load(blocks, x, samples, radius2, inv_h2),
+        };
         self.len = len;
         self.inv_h2 = inv_h2;
         self.shift = shift;
         len
     }
+}
+
+/// The loop of [`FieldScratch::load`]: fills `blocks` and returns the count and the shift.
+#[inline(always)]
+fn load_blocks(
+    blocks: &mut [Block],
+    x: &Point,
+    samples: &[Sample],
+    radius2: f64,
+    inv_h2: f64,
+) -> (usize, f64) {
+    let inv_h = inv_h2.sqrt();
+    let mut len = 0;
+    for s in samples {
+        let e = x - s.point;
+        let keep = !(e.norm_squared() > radius2);
+        // Lengths are in units of h from here on (d ← d/h, so a = 1/h² becomes 1): every
+        // sum is then of order one at any scale of the cloud, and no power of 1/h² can
+        // overflow (a² alone overflows for h below about 1e-77).
+        let d = e * inv_h;
+        let (block, lane) = (&mut blocks[len / LANES], len % LANES);
+        block.d[0][lane] = d.x;
+        block.d[1][lane] = d.y;
+        block.d[2][lane] = d.z;
+        block.normal[0][lane] = s.normal.x;
+        block.normal[1][lane] = s.normal.y;
+        block.normal[2][lane] = s.normal.z;
+        block.w[lane] = d.norm_squared();
+        len += usize::from(keep);
+    }
+    // The free lanes of the last block: exp(−∞) = 0 makes their weights exactly zero.
+    let end = len.div_ceil(LANES);
+    for slot in len..end * LANES {
+        let (block, lane) = (&mut blocks[slot / LANES], slot % LANES);
+        for k in 0..3 {
+            block.d[k][lane] = 0.0;
+            block.normal[k][lane] = 0.0;
+        }
+        block.w[lane] = f64::INFINITY;
+    }
+    // The shift δ²/h², outside the loop above so that it has no branch.
+    let mut nearest = [f64::INFINITY; LANES];
+    for block in &blocks[..end] {
+        for (m, &w) in nearest.iter_mut().zip(&block.w) {
+            *m = if w < *m { w } else { *m };
+        }
+    }
+    let shift = nearest.into_iter().fold(f64::INFINITY, f64::min);
+    (len, shift)
 }
 
 /// Evaluates g, ∇g and H at `x` from the given support samples in two passes (the normal-field
@@ -181,6 +202,18 @@ pub fn evaluate(
 
 /// [`evaluate`] on the samples last loaded by [`FieldScratch::load`].
 pub fn evaluate_loaded(scratch: &mut FieldScratch) -> Result<Implicit, PointStatus> {
+    match Isa::detect() {
+        #[cfg(target_arch = "x86_64")]
+        Isa::Avx2(k) => evaluate_with(k, scratch),
+        Isa::Portable(k) => evaluate_with(k, scratch),
+    }
+}
+
+/// [`evaluate_loaded`] with the per-sample loops of `kernels`.
+fn evaluate_with(
+    kernels: impl Kernels,
+    scratch: &mut FieldScratch,
+) -> Result<Implicit, PointStatus> {
     if scratch.len == 0 {
         return Err(PointStatus::NoNeighbours);
     }
@@ -190,22 +223,8 @@ pub fn evaluate_loaded(scratch: &mut FieldScratch) -> Result<Implicit, PointStat
     let inv_h = inv_h2.sqrt();
     let a = 1.0;
     let blocks = &mut scratch.blocks[..scratch.len.div_ceil(LANES)];
-    // The shifted weights in place of the squared lengths, and the d dᵀ products both passes
-    // use.
-    for block in blocks.iter_mut() {
-        for lane in 0..LANES {
-            block.w[lane] = exp_weight(-(block.w[lane] - shift) * a);
-            let [x, y, z] = block.d.map(|c| c[lane]);
-            for (k, p) in [x * x, x * y, x * z, y * y, y * z, z * z]
-                .into_iter()
-                .enumerate()
-            {
-                block.dd[k][lane] = p;
-            }
-        }
-    }
-
-    let (field, weight_sum) = normal_field_weighted(blocks)?;
+    let weight_sum = kernels.weigh(blocks, shift * a);
+    let field = normal_field_weighted(kernels, blocks, weight_sum)?;
     let n = field.normal;
     // K = Jᵀ, so that D = ∂B/∂x = n + K d (the paper's D).
     let jt = field.jacobian.transpose();
@@ -213,30 +232,17 @@ pub fn evaluate_loaded(scratch: &mut FieldScratch) -> Result<Implicit, PointStat
     // scalar coefficients are formed, and J enters once at the end: with D = n + K d,
     //   Σ c (d Dᵀ + D dᵀ) = V nᵀ + n Vᵀ + Q Kᵀ + K Q     (V = Σ c d, Q = Σ c d dᵀ)
     //   Σ c D Dᵀ = S n nᵀ + n (K V)ᵀ + K V nᵀ + K Q Kᵀ   (S = Σ c).
-    for block in blocks.iter_mut() {
-        for lane in 0..LANES {
-            let b = block.d[0][lane] * n.x + block.d[1][lane] * n.y + block.d[2][lane] * n.z;
-            let b2 = b * b;
-            let alpha = 2.0 * a * b * (a * b2 - 1.0);
-            let beta = 1.0 - 3.0 * a * b2;
-            let w2 = 2.0 * block.w[lane];
-            let c_sym = 6.0 * a * a * b2 - 2.0 * a;
-            let c_bb = -6.0 * a * b;
-            block.coef[0][lane] = w2 * alpha;
-            block.coef[1][lane] = w2 * beta;
-            block.coef[2][lane] = w2 * c_sym;
-            block.coef[3][lane] = w2 * c_bb;
-        }
-    }
-    let alpha = moments::<true>(blocks, |b| b.coef[0]);
-    let beta = moments::<false>(blocks, |b| b.coef[1]);
-    let sym = moments::<true>(blocks, |b| b.coef[2]);
-    let bb = moments::<true>(blocks, |b| b.coef[3]);
+    kernels.coefficients(blocks, &n);
+    let alpha = moments(kernels, blocks, 0);
+    let beta = moments(kernels, blocks, 1);
+    let bb = moments(kernels, blocks, 2);
     let (sum_alpha, sum_alpha_d) = (alpha.sum, alpha.first);
     let (sum_beta, sum_beta_d) = (beta.sum, beta.first);
     // The D dᵀ-free part of ∂(2wα d)/∂x: c_dd = −2aα.
     let q_dd = alpha.second.matrix() * (-2.0 * a);
-    let (v_sym, q_sym) = (sym.first, sym.second.matrix());
+    // The coefficient of the (D dᵀ + d Dᵀ) term is c_sym = 6a²B² − 2a = −2aβ: its moments are
+    // β's (bit for bit: both round 3aB² once, and the factor 2 is exact).
+    let (v_sym, q_sym) = (sum_beta_d * (-2.0 * a), beta.second.matrix() * (-2.0 * a));
     let (s_bb, v_bb, q_bb) = (bb.sum, bb.first, bb.second.matrix());
     // g = Σ 2w(B − aB³) = −Σ 2wα / (2a).
     let value = -sum_alpha / (2.0 * a);
@@ -291,10 +297,10 @@ struct Moments {
     second: Sym,
 }
 
-/// The [`Moments`] of the coefficients `coef(block)`, in `LANES` partial sums each.
-fn moments<const SECOND: bool>(blocks: &[Block], coef: impl Fn(&Block) -> Lanes) -> Moments {
+/// The [`Moments`] of the coefficients `block.coef[k]`.
+fn moments(kernels: impl Kernels, blocks: &[Block], k: usize) -> Moments {
     let mut acc = [[0.0; LANES]; 10];
-    lane_moments::<SECOND>(blocks, coef, &mut acc);
+    kernels.lane_moments(blocks, k, &mut acc);
     let [s, x, y, z, xx, xy, xz, yy, yz, zz] = acc.map(|lanes| lanes.iter().sum::<f64>());
     Moments {
         sum: s,
@@ -303,29 +309,208 @@ fn moments<const SECOND: bool>(blocks: &[Block], coef: impl Fn(&Block) -> Lanes)
     }
 }
 
-/// The partial sums of [`moments`], one per lane: `acc[0]` of `c`, `acc[1..4]` of `c d`,
-/// `acc[4..10]` of `c d dᵀ`. Not inlined, and each lane's sum stored to `acc`, so that the
-/// compiler pairs the lanes of one sum into SIMD registers.
-#[inline(never)]
-fn lane_moments<const SECOND: bool>(
-    blocks: &[Block],
-    coef: impl Fn(&Block) -> Lanes,
-    acc: &mut [Lanes; 10],
-) {
+/// The per-sample loops, compiled for one instruction set. They are the only code whose cost
+/// grows with the number of samples; the per-point algebra around them is the same for all.
+trait Kernels: Copy {
+    /// [`load_blocks`].
+    fn load(
+        self,
+        blocks: &mut [Block],
+        x: &Point,
+        samples: &[Sample],
+        radius2: f64,
+        inv_h2: f64,
+    ) -> (usize, f64);
+    /// [`weigh`].
+    fn weigh(self, blocks: &mut [Block], shift: f64) -> f64;
+    /// [`coefficients`].
+    fn coefficients(self, blocks: &mut [Block], n: &Vector);
+    /// [`lane_moments`].
+    fn lane_moments(self, blocks: &[Block], k: usize, acc: &mut [Lanes; 10]);
+}
+
+/// The instruction sets [`Kernels`] are compiled for, and the one this CPU runs.
+#[derive(Clone, Copy, Debug)]
+enum Isa {
+    /// The target's baseline (SSE2 on x86-64).
+    Portable(Portable),
+    /// x86-64 with AVX2: four lanes in one register.
+    #[cfg(target_arch = "x86_64")]
+    Avx2(Avx2),
+}
+
+impl Isa {
+    /// The best [`Kernels`] for this CPU (the standard library caches the CPUID answer).
+    #[inline(always)]
+    fn detect() -> Self {
+        #[cfg(target_arch = "x86_64")]
+        if let Some(k) = Avx2::new() {
+            return Self::Avx2(k);
+        }
+        Self::Portable(Portable)
+    }
+}
+
+/// [`Kernels`] for the target's baseline features.
+#[derive(Clone, Copy, Debug)]
+struct Portable;
+
+impl Kernels for Portable {
+    fn load(
+        self,
+        blocks: &mut [Block],
+        x: &Point,
+        samples: &[Sample],
+        radius2: f64,
+        inv_h2: f64,
+    ) -> (usize, f64) {
+        load_blocks(blocks, x, samples, radius2, inv_h2)
+    }
+    fn weigh(self, blocks: &mut [Block], shift: f64) -> f64 {
+        weigh(blocks, shift)
+    }
+    fn coefficients(self, blocks: &mut [Block], n: &Vector) {
+        coefficients(blocks, n)
+    }
+    fn lane_moments(self, blocks: &[Block], k: usize, acc: &mut [Lanes; 10]) {
+        lane_moments(blocks, k, acc)
+    }
+}
+
+/// [`Kernels`] compiled with AVX2. A value exists only on a CPU that has it.
+#[cfg(target_arch = "x86_64")]
+#[derive(Clone, Copy, Debug)]
+struct Avx2(());
+
+#[cfg(target_arch = "x86_64")]
+impl Avx2 {
+    fn new() -> Option<Self> {
+        std::arch::is_x86_feature_detected!("avx2").then_some(Self(()))
+    }
+
+    #[target_feature(enable = "avx2")]
+    fn load(
+        blocks: &mut [Block],
+        x: &Point,
+        samples: &[Sample],
+        radius2: f64,
+        inv_h2: f64,
+    ) -> (usize, f64) {
+        load_blocks(blocks, x, samples, radius2, inv_h2)
+    }
+
+    #[target_feature(enable = "avx2")]
+    fn weigh(blocks: &mut [Block], shift: f64) -> f64 {
+        weigh(blocks, shift)
+    }
+
+    #[target_feature(enable = "avx2")]
+    fn coefficients(blocks: &mut [Block], n: &Vector) {
+        coefficients(blocks, n)
+    }
+
+    #[target_feature(enable = "avx2")]
+    fn lane_moments(blocks: &[Block], k: usize, acc: &mut [Lanes; 10]) {
+        lane_moments(blocks, k, acc)
+    }
+}
+
+// SAFETY (each call below): `self` proves that `Avx2::new` found AVX2 on this CPU.
+#[cfg(target_arch = "x86_64")]
+#[allow(unsafe_code)]
+impl Kernels for Avx2 {
+    fn load(
+        self,
+        blocks: &mut [Block],
+        x: &Point,
+        samples: &[Sample],
+        radius2: f64,
+        inv_h2: f64,
+    ) -> (usize, f64) {
+        unsafe { Self::load(blocks, x, samples, radius2, inv_h2) }
+    }
+    fn weigh(self, blocks: &mut [Block], shift: f64) -> f64 {
+        unsafe { Self::weigh(blocks, shift) }
+    }
+    fn coefficients(self, blocks: &mut [Block], n: &Vector) {
+        unsafe { Self::coefficients(blocks, n) }
+    }
+    fn lane_moments(self, blocks: &[Block], k: usize, acc: &mut [Lanes; 10]) {
+        unsafe { Self::lane_moments(blocks, k, acc) }
+    }
+}
+
+/// The shifted weights `exp(−(|d|² − shift))` in place of the squared lengths, and the
+/// `d dᵀ` products both passes use. The first pass's coefficients `w v` go to `coef`.
+/// Returns `Σ w`.
+#[inline(always)]
+fn weigh(blocks: &mut [Block], shift: f64) -> f64 {
+    let mut sum = [0.0; LANES];
+    for block in blocks {
+        // One exp per lane, written out: the compiler does not unroll a loop around a body this
+        // long, and only unrolled copies become one SIMD sequence.
+        let w = per_lane(|l| exp_weight(shift - block.w[l]));
+        block.w = w;
+        sum = per_lane(|l| sum[l] + w[l]);
+        let [x, y, z] = block.d;
+        let mul = |u: Lanes, v: Lanes| per_lane(|l| u[l] * v[l]);
+        block.dd = [
+            mul(x, x),
+            mul(x, y),
+            mul(x, z),
+            mul(y, y),
+            mul(y, z),
+            mul(z, z),
+        ];
+        block.coef = block.normal.map(|v| mul(w, v));
+    }
+    sum.iter().sum()
+}
+
+/// `[f(0), …, f(LANES − 1)]`, unrolled.
+#[inline(always)]
+fn per_lane(f: impl Fn(usize) -> f64) -> Lanes {
+    const { assert!(LANES == 4) };
+    [f(0), f(1), f(2), f(3)]
+}
+
+/// The second pass's per-sample coefficients for the normal `n`: `2wα`, `2wβ` and `2w c_bb`
+/// with `B = d·n`, `α = 2aB(aB² − 1)`, `β = 1 − 3aB²`, `c_bb = −6aB` (a = 1: lengths are in
+/// units of h).
+#[inline(always)]
+fn coefficients(blocks: &mut [Block], n: &Vector) {
+    let a = 1.0;
+    for block in blocks {
+        for lane in 0..LANES {
+            let b = block.d[0][lane] * n.x + block.d[1][lane] * n.y + block.d[2][lane] * n.z;
+            let b2 = b * b;
+            let alpha = 2.0 * a * b * (a * b2 - 1.0);
+            let beta = 1.0 - 3.0 * a * b2;
+            let w2 = 2.0 * block.w[lane];
+            let c_bb = -6.0 * a * b;
+            block.coef[0][lane] = w2 * alpha;
+            block.coef[1][lane] = w2 * beta;
+            block.coef[2][lane] = w2 * c_bb;
+        }
+    }
+}
+
+/// The partial sums of [`moments`] of `block.coef[k]`, one per lane: `acc[0]` of `c`,
+/// `acc[1..4]` of `c d`, `acc[4..10]` of `c d dᵀ`.
+#[inline(always)]
+fn lane_moments(blocks: &[Block], k: usize, acc: &mut [Lanes; 10]) {
     let mut sum = [0.0; LANES];
     let mut first = [[0.0; LANES]; 3];
     let mut second = [[0.0; LANES]; 6];
     for block in blocks {
-        let c = coef(block);
+        let c = block.coef[k];
         for lane in 0..LANES {
             sum[lane] += c[lane];
             for (f, d) in first.iter_mut().zip(&block.d) {
                 f[lane] += c[lane] * d[lane];
             }
-            if SECOND {
-                for (s, dd) in second.iter_mut().zip(&block.dd) {
-                    s[lane] += c[lane] * dd[lane];
-                }
+            for (s, dd) in second.iter_mut().zip(&block.dd) {
+                s[lane] += c[lane] * dd[lane];
             }
         }
     }
@@ -334,30 +519,21 @@ fn lane_moments<const SECOND: bool>(
     acc[4..].copy_from_slice(&second);
 }
 
-/// `Σ f(block)` over every lane, in `LANES` partial sums.
-fn lane_sum(blocks: &[Block], f: impl Fn(&Block) -> Lanes) -> f64 {
-    let mut sum = [0.0; LANES];
-    for block in blocks {
-        let v = f(block);
-        for lane in 0..LANES {
-            sum[lane] += v[lane];
-        }
-    }
-    sum.iter().sum()
-}
-
 /// The first pass. With `m = Σ w v`, `∇w = −2a w d` and `∇∇w = w(4a² d dᵀ − 2a I)`:
 /// `M1 = ∂m/∂x = −2a Σ w v dᵀ`, `M2_a = 4a² Σ w v_a d dᵀ − 2a m_a I`, and with `r = |m|`,
 /// `P = I − n nᵀ`, `u = M1ᵀ n` (= ∇r):
 /// $$ J = P M_1 / r,\qquad
 ///    N_a = \big( (P M_2)_a - J_{a\cdot} u^T - u J_{a\cdot}^T - n_a J^T M_1 \big) / r. $$
 /// The loaded offsets are `(x − q)/h`: lengths are in units of h, hence `a = 1`; the caller
-/// scales J and ∂²n back. Also returns `Σ w`.
-fn normal_field_weighted(blocks: &[Block]) -> Result<(NormalField, f64), PointStatus> {
+/// scales J and ∂²n back. `weight_sum` is `Σ w`.
+fn normal_field_weighted(
+    kernels: impl Kernels,
+    blocks: &[Block],
+    weight_sum: f64,
+) -> Result<NormalField, PointStatus> {
     let a = 1.0;
     // Row c of S1 = Σ w v dᵀ and s2[c] = Σ w v_c d dᵀ (symmetric) are the moments of w v_c.
-    let [mx, my, mz] = [0, 1, 2]
-        .map(|c| moments::<true>(blocks, |b| std::array::from_fn(|l| b.w[l] * b.normal[c][l])));
+    let [mx, my, mz] = [0, 1, 2].map(|c| moments(kernels, blocks, c));
     let m = Vector::new(mx.sum, my.sum, mz.sum);
     let s1 = Matrix::from_rows(&[
         mx.first.transpose(),
@@ -365,7 +541,6 @@ fn normal_field_weighted(blocks: &[Block]) -> Result<(NormalField, f64), PointSt
         mz.first.transpose(),
     ]);
     let s2 = [mx.second, my.second, mz.second];
-    let weight_sum = lane_sum(blocks, |b| b.w);
     let r = m.norm();
     let coherence = r / weight_sum;
     if !(coherence >= MIN_NORMAL_COHERENCE) {
@@ -388,15 +563,12 @@ fn normal_field_weighted(blocks: &[Block]) -> Result<(NormalField, f64), PointSt
         let ju = jrow * u.transpose();
         (pm2 - ju - ju.transpose() - jtm1 * n[c]) / r
     });
-    Ok((
-        NormalField {
-            normal: n,
-            jacobian,
-            second,
-            coherence,
-        },
-        weight_sum,
-    ))
+    Ok(NormalField {
+        normal: n,
+        jacobian,
+        second,
+        coherence,
+    })
 }
 
 /// A symmetric 3 × 3 accumulator holding the six distinct entries.
@@ -484,5 +656,62 @@ mod tests {
         assert_eq!(exp_weight(-746.0), 0.0);
         assert_eq!(exp_weight(f64::NEG_INFINITY), 0.0);
         assert_eq!(exp_weight(-1e300), 0.0);
+    }
+}
+
+/// Every [`Kernels`] implementation this CPU can run gives the same bits: the lane count is
+/// fixed and no path fuses operations.
+#[cfg(all(test, target_arch = "x86_64"))]
+mod isa_tests {
+    use rand::{Rng, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    use super::*;
+
+    fn run(kernels: impl Kernels, x: &Point, samples: &[Sample]) -> Result<Implicit, PointStatus> {
+        let mut scratch = FieldScratch::default();
+        let needed = samples.len() / LANES + 1;
+        scratch.blocks.resize(needed, Block::default());
+        let (len, shift) = kernels.load(&mut scratch.blocks, x, samples, 0.25, 100.0);
+        (scratch.len, scratch.inv_h2, scratch.shift) = (len, 100.0, shift);
+        evaluate_with(kernels, &mut scratch)
+    }
+
+    #[test]
+    fn avx2_and_portable_kernels_agree_bitwise() {
+        let Some(avx2) = Avx2::new() else {
+            eprintln!("no AVX2 on this CPU: only the portable kernels exist here");
+            return;
+        };
+        let mut rng = ChaCha8Rng::seed_from_u64(7);
+        // A bumpy unit-sphere patch of 600 samples with perturbed normals (the ragged last
+        // block and the cutoff both exercised), queried off the surface.
+        let samples: Vec<Sample> = (0..600)
+            .map(|_| {
+                let v = Vector::new(
+                    rng.random_range(-0.4..0.4),
+                    rng.random_range(-0.4..0.4),
+                    1.0,
+                )
+                .normalize();
+                let r = 1.0 + 0.01 * rng.random_range(-1.0..1.0);
+                let tilt = Vector::new(rng.random_range(-0.1..0.1), 0.0, 0.0);
+                Sample {
+                    point: Point::from(v * r),
+                    normal: (v + tilt).normalize(),
+                }
+            })
+            .collect();
+        for _ in 0..20 {
+            let x = Point::new(
+                rng.random_range(-0.2..0.2),
+                rng.random_range(-0.2..0.2),
+                rng.random_range(0.95..1.05),
+            );
+            let (a, b) = (run(Portable, &x, &samples), run(avx2, &x, &samples));
+            let a = a.expect("evaluates");
+            assert!(a.neighbours > 100 && a.neighbours < 600, "{}", a.neighbours);
+            assert_eq!(Ok(a), b);
+        }
     }
 }
