@@ -351,6 +351,17 @@ impl Isa {
     }
 }
 
+/// The instruction set the per-sample loops of [`evaluate`] run with on this CPU: `"avx2"`, or
+/// `"baseline"` (the compilation target's own features: SSE2 on x86-64). Results are the same
+/// bits with either; only the speed differs.
+pub fn kernel_isa() -> &'static str {
+    match Isa::detect() {
+        #[cfg(target_arch = "x86_64")]
+        Isa::Avx2(_) => "avx2",
+        Isa::Portable(_) => "baseline",
+    }
+}
+
 /// [`Kernels`] for the target's baseline features.
 #[derive(Clone, Copy, Debug)]
 struct Portable;
