@@ -13,6 +13,7 @@
 //! [`Implicit::log_scale`] records it.
 
 use crate::math::{Matrix, Point, Vector};
+use crate::projection::{LineBlock, line_energy};
 use crate::status::PointStatus;
 
 /// A sample of the cloud: a point with its unit, consistently oriented normal.
@@ -87,7 +88,7 @@ type Lanes = [f64; LANES];
 /// that the per-neighbour loops read whole lane arrays). Unused lanes of the last block hold
 /// zero offsets, normals and weights, and add exactly zero to every sum.
 #[derive(Clone, Copy, Debug, Default)]
-struct Block {
+pub(crate) struct Block {
     /// `d = (x − q)/h`, per axis.
     d: [Lanes; 3],
     /// The unit normal `v`, per axis.
@@ -136,6 +137,36 @@ impl FieldScratch {
         self.inv_h2 = inv_h2;
         self.shift = shift;
         len
+    }
+}
+
+impl FieldScratch {
+    /// n(x) alone (Eq. 2), without derivatives, from the samples last loaded by
+    /// [`FieldScratch::load`]. It uses them up: load again before [`evaluate_loaded`].
+    pub(crate) fn loaded_normal(&mut self) -> Result<Vector, PointStatus> {
+        if self.len == 0 {
+            return Err(PointStatus::NoNeighbours);
+        }
+        let blocks = &mut self.blocks[..self.len.div_ceil(LANES)];
+        self.len = 0;
+        let shift = self.shift;
+        let weight_sum = match Isa::detect() {
+            #[cfg(target_arch = "x86_64")]
+            Isa::Avx2(k) => k.weights(blocks, shift),
+            Isa::Portable(k) => k.weights(blocks, shift),
+        };
+        let m = Vector::from_fn(|c, _| {
+            let mut sum = [0.0; LANES];
+            for block in blocks.iter() {
+                sum = per_lane(|l| sum[l] + block.w[l] * block.normal[c][l]);
+            }
+            sum.iter().sum()
+        });
+        let r = m.norm();
+        if !(r >= MIN_NORMAL_COHERENCE * weight_sum) {
+            return Err(PointStatus::NormalUndefined);
+        }
+        Ok(m / r)
     }
 }
 
@@ -311,7 +342,7 @@ fn moments(kernels: impl Kernels, blocks: &[Block], k: usize) -> Moments {
 
 /// The per-sample loops, compiled for one instruction set. They are the only code whose cost
 /// grows with the number of samples; the per-point algebra around them is the same for all.
-trait Kernels: Copy {
+pub(crate) trait Kernels: Copy {
     /// [`load_blocks`].
     fn load(
         self,
@@ -323,15 +354,19 @@ trait Kernels: Copy {
     ) -> (usize, f64);
     /// [`weigh`].
     fn weigh(self, blocks: &mut [Block], shift: f64) -> f64;
+    /// [`weights`].
+    fn weights(self, blocks: &mut [Block], shift: f64) -> f64;
     /// [`coefficients`].
     fn coefficients(self, blocks: &mut [Block], n: &Vector);
     /// [`lane_moments`].
     fn lane_moments(self, blocks: &[Block], k: usize, acc: &mut [Lanes; 10]);
+    /// [`crate::projection::line_energy`].
+    fn line_energy(self, line: &mut [LineBlock], a: f64, shift: f64, t: f64, acc: &mut [Lanes; 2]);
 }
 
 /// The instruction sets [`Kernels`] are compiled for, and the one this CPU runs.
 #[derive(Clone, Copy, Debug)]
-enum Isa {
+pub(crate) enum Isa {
     /// The target's baseline (SSE2 on x86-64).
     Portable(Portable),
     /// x86-64 with AVX2: four lanes in one register.
@@ -342,7 +377,7 @@ enum Isa {
 impl Isa {
     /// The best [`Kernels`] for this CPU (the standard library caches the CPUID answer).
     #[inline(always)]
-    fn detect() -> Self {
+    pub(crate) fn detect() -> Self {
         #[cfg(target_arch = "x86_64")]
         if let Some(k) = Avx2::new() {
             return Self::Avx2(k);
@@ -364,7 +399,7 @@ pub fn kernel_isa() -> &'static str {
 
 /// [`Kernels`] for the target's baseline features.
 #[derive(Clone, Copy, Debug)]
-struct Portable;
+pub(crate) struct Portable;
 
 impl Kernels for Portable {
     fn load(
@@ -380,18 +415,24 @@ impl Kernels for Portable {
     fn weigh(self, blocks: &mut [Block], shift: f64) -> f64 {
         weigh(blocks, shift)
     }
+    fn weights(self, blocks: &mut [Block], shift: f64) -> f64 {
+        weights(blocks, shift)
+    }
     fn coefficients(self, blocks: &mut [Block], n: &Vector) {
         coefficients(blocks, n)
     }
     fn lane_moments(self, blocks: &[Block], k: usize, acc: &mut [Lanes; 10]) {
         lane_moments(blocks, k, acc)
     }
+    fn line_energy(self, line: &mut [LineBlock], a: f64, shift: f64, t: f64, acc: &mut [Lanes; 2]) {
+        line_energy(line, a, shift, t, acc)
+    }
 }
 
 /// [`Kernels`] compiled with AVX2. A value exists only on a CPU that has it.
 #[cfg(target_arch = "x86_64")]
 #[derive(Clone, Copy, Debug)]
-struct Avx2(());
+pub(crate) struct Avx2(());
 
 #[cfg(target_arch = "x86_64")]
 impl Avx2 {
@@ -416,6 +457,11 @@ impl Avx2 {
     }
 
     #[target_feature(enable = "avx2")]
+    fn weights(blocks: &mut [Block], shift: f64) -> f64 {
+        weights(blocks, shift)
+    }
+
+    #[target_feature(enable = "avx2")]
     fn coefficients(blocks: &mut [Block], n: &Vector) {
         coefficients(blocks, n)
     }
@@ -423,6 +469,11 @@ impl Avx2 {
     #[target_feature(enable = "avx2")]
     fn lane_moments(blocks: &[Block], k: usize, acc: &mut [Lanes; 10]) {
         lane_moments(blocks, k, acc)
+    }
+
+    #[target_feature(enable = "avx2")]
+    fn line_energy(line: &mut [LineBlock], a: f64, shift: f64, t: f64, acc: &mut [Lanes; 2]) {
+        line_energy(line, a, shift, t, acc)
     }
 }
 
@@ -443,11 +494,17 @@ impl Kernels for Avx2 {
     fn weigh(self, blocks: &mut [Block], shift: f64) -> f64 {
         unsafe { Self::weigh(blocks, shift) }
     }
+    fn weights(self, blocks: &mut [Block], shift: f64) -> f64 {
+        unsafe { Self::weights(blocks, shift) }
+    }
     fn coefficients(self, blocks: &mut [Block], n: &Vector) {
         unsafe { Self::coefficients(blocks, n) }
     }
     fn lane_moments(self, blocks: &[Block], k: usize, acc: &mut [Lanes; 10]) {
         unsafe { Self::lane_moments(blocks, k, acc) }
+    }
+    fn line_energy(self, line: &mut [LineBlock], a: f64, shift: f64, t: f64, acc: &mut [Lanes; 2]) {
+        unsafe { Self::line_energy(line, a, shift, t, acc) }
     }
 }
 
@@ -478,9 +535,23 @@ fn weigh(blocks: &mut [Block], shift: f64) -> f64 {
     sum.iter().sum()
 }
 
+/// The shifted weights alone, in place of the squared lengths (for n(x) without derivatives).
+/// Returns `Σ w`.
+#[inline(always)]
+fn weights(blocks: &mut [Block], shift: f64) -> f64 {
+    for block in blocks.iter_mut() {
+        block.w = per_lane(|l| exp_weight(shift - block.w[l]));
+    }
+    let mut sum = [0.0; LANES];
+    for block in blocks.iter() {
+        sum = per_lane(|l| sum[l] + block.w[l]);
+    }
+    sum.iter().sum()
+}
+
 /// `[f(0), …, f(LANES − 1)]`, unrolled.
 #[inline(always)]
-fn per_lane(f: impl Fn(usize) -> f64) -> Lanes {
+pub(crate) fn per_lane(f: impl Fn(usize) -> f64) -> Lanes {
     const { assert!(LANES == 4) };
     [f(0), f(1), f(2), f(3)]
 }
@@ -593,17 +664,18 @@ impl Sym {
     }
 }
 
-/// `exp(x)` for `x ≤ 0` (the shifted weights), within 1 ulp of `f64::exp`, branch-free so that
-/// the compiler runs it on both lanes of a block at once (a call to the C library's `exp` per
-/// sample cost as much as the first pass).
+/// `exp(x)`, within 1 ulp of `f64::exp`, branch-free so that the compiler runs it on every
+/// lane of a block at once (a call to the C library's `exp` per sample cost as much as the
+/// first pass). The weights have `x ≤ 0`; the projection's line energy also needs moderate
+/// positive `x`.
 ///
 /// fdlibm's algorithm: `x = k ln 2 + r` with `|r| ≤ ln 2 / 2` (`ln 2` split in a high part
 /// whose products with k are exact and a low part), then a degree-5 minimax polynomial `R`
 /// with `exp(r) = 1 + 2r/(R(r) − r)` arranged as below, and the result scaled by `2^k`.
 /// Results below `f64::MIN_POSITIVE` are subnormal, rounded once as `f64::exp` rounds them;
-/// below about −745.1, −∞ and NaN give 0.
+/// below about −745.1, −∞ and NaN give 0; above about 709.78 and +∞ give +∞.
 #[inline(always)]
-fn exp_weight(x: f64) -> f64 {
+pub(crate) fn exp_weight(x: f64) -> f64 {
     const LN2_HI: f64 = 6.931_471_803_691_238e-1;
     const LN2_LO: f64 = 1.908_214_929_270_587_7e-10;
     const INV_LN2: f64 = std::f64::consts::LOG2_E;
@@ -614,10 +686,10 @@ fn exp_weight(x: f64) -> f64 {
     const P5: f64 = 4.138_136_797_057_238_5e-8;
     // Adding 1.5·2⁵² rounds to an integer, which then sits in the low bits of the sum.
     const ROUND: f64 = 6_755_399_441_055_744.0;
-    // Below k = −1000, 2^k is applied in two steps (2^(k + 200), then 2^−200) so that the
-    // first stays normal and the result is rounded once.
+    // Beyond |k| = 1000, 2^k is applied in two steps (2^(k ∓ 200), then 2^±200) so that the
+    // first stays normal and the result is rounded (or overflows) once.
     const SPLIT: f64 = 200.0;
-    let xc = x.max(-746.0);
+    let xc = x.clamp(-746.0, 746.0);
     let kf = (xc * INV_LN2 + ROUND) - ROUND;
     let hi = xc - kf * LN2_HI;
     let lo = kf * LN2_LO;
@@ -626,13 +698,22 @@ fn exp_weight(x: f64) -> f64 {
     let c = r - t * (P1 + t * (P2 + t * (P3 + t * (P4 + t * P5))));
     let y = 1.0 - ((lo - (r * c) / (2.0 - c)) - hi);
     // Everything in f64 (SSE2 has no 64-bit integer comparison): the biased exponent
-    // k + 1023, in [147, 1023], is an integer in the low bits of `ROUND + k + 1023`, and the
+    // k + 1023, in [147, 1900], is an integer in the low bits of `ROUND + k + 1023`, and the
     // shift keeps exactly those 11 bits.
     let low = kf < -1000.0;
-    let k1 = if low { kf + SPLIT } else { kf };
+    let high = kf > 1000.0;
+    let k1 = if low {
+        kf + SPLIT
+    } else if high {
+        kf - SPLIT
+    } else {
+        kf
+    };
     let scale = f64::from_bits((k1 + (1023.0 + ROUND)).to_bits() << 52);
     let tail = if low {
         f64::from_bits((1023 - SPLIT as u64) << 52)
+    } else if high {
+        f64::from_bits((1023 + SPLIT as u64) << 52)
     } else {
         1.0
     };
@@ -661,7 +742,16 @@ mod tests {
             let x = -(i as f64) * 1e-6;
             worst = worst.max(ulps(exp_weight(x), x.exp()));
         }
+        // Positive arguments, up to the largest finite result.
+        for i in 0..=2_000_000 {
+            let x = (i as f64) * 709.78 / 2_000_000.0;
+            worst = worst.max(ulps(exp_weight(x), x.exp()));
+        }
         assert!(worst <= 1, "worst {worst} ulps");
+        assert_eq!(exp_weight(709.79), f64::INFINITY);
+        assert_eq!(exp_weight(1e300), f64::INFINITY);
+        assert_eq!(exp_weight(f64::INFINITY), f64::INFINITY);
+        assert_eq!(exp_weight(f64::NAN), 0.0);
         assert_eq!(exp_weight(0.0), 1.0);
         assert_eq!(exp_weight(-0.0), 1.0);
         assert_eq!(exp_weight(-746.0), 0.0);

@@ -8,6 +8,9 @@
 //! about ±h off the surface. The search walks downhill and brackets a sign change of e' from
 //! negative to positive (in the walking direction), so it only ever stops where `e'' ≥ 0`.
 
+use crate::field::{Isa, Kernels, Sample, exp_weight, per_lane};
+use crate::math::{Point, Vector};
+
 /// Stopping rules of the projection.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ProjectionConfig {
@@ -34,25 +37,78 @@ impl Default for ProjectionConfig {
     }
 }
 
-/// One sample seen from the line: `b = (x − q)·n` and `c = |x − q|²`.
+/// Four samples seen from the line: `b = (x − q)·n` and `c = |x − q|²` of each (structure of
+/// arrays, so that the four are computed side by side).
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub(crate) struct LineSample {
-    pub b: f64,
-    pub c: f64,
+pub(crate) struct LineBlock {
+    pub b: [f64; 4],
+    pub c: [f64; 4],
+    /// The weights at the last `t` evaluated. Only scratch, but written to memory: the
+    /// compiler vectorises the exp only when its results are stored.
+    pub w: [f64; 4],
+}
+
+impl LineBlock {
+    /// The line of `samples` through `x` in direction `n`, in blocks of four; the last block
+    /// is padded with samples infinitely far away (weight exactly zero, `b = 0`).
+    pub(crate) fn fill(out: &mut Vec<Self>, x: &Point, n: &Vector, samples: &[Sample]) {
+        out.clear();
+        out.extend(samples.chunks(4).map(|group| {
+            let mut block = Self {
+                b: [0.0; 4],
+                c: [f64::INFINITY; 4],
+                w: [0.0; 4],
+            };
+            for (l, q) in group.iter().enumerate() {
+                let d = x - q.point;
+                block.b[l] = d.dot(n);
+                block.c[l] = d.norm_squared();
+            }
+            block
+        }));
+    }
 }
 
 /// `(e'(t), e''(t))`, both scaled by the same positive constant `exp(a·shift)`.
-fn energy_derivatives(line: &[LineSample], a: f64, shift: f64, t: f64) -> (f64, f64) {
-    let mut e1 = 0.0;
-    let mut e2 = 0.0;
-    for s in line {
-        let theta = (-a * (s.c + 2.0 * t * s.b + t * t - shift)).exp();
-        let bb = s.b + t;
-        let ab2 = a * bb * bb;
-        e1 += 2.0 * theta * bb * (1.0 - ab2);
-        e2 += theta * (2.0 - 10.0 * ab2 + 4.0 * ab2 * ab2);
+fn energy_derivatives(line: &mut [LineBlock], a: f64, shift: f64, t: f64) -> (f64, f64) {
+    let mut acc = [[0.0; 4]; 2];
+    match Isa::detect() {
+        #[cfg(target_arch = "x86_64")]
+        Isa::Avx2(k) => k.line_energy(line, a, shift, t, &mut acc),
+        Isa::Portable(k) => k.line_energy(line, a, shift, t, &mut acc),
     }
-    (e1, e2)
+    (acc[0].iter().sum(), acc[1].iter().sum())
+}
+
+/// The loop of [`energy_derivatives`], compiled once per instruction set (see
+/// `field::Kernels`): four partial sums each of e' and e'' into `acc`. Stored through a
+/// reference, as the field's moments are, so that the compiler pairs the lanes into one
+/// register (it found no vector code in a version that returned the sums).
+#[inline(always)]
+pub(crate) fn line_energy(
+    line: &mut [LineBlock],
+    a: f64,
+    shift: f64,
+    t: f64,
+    acc: &mut [[f64; 4]; 2],
+) {
+    // Two loops, the weights first: the compiler vectorises the exp only in a loop that
+    // stores its results.
+    for block in line.iter_mut() {
+        let (b, c) = (block.b, block.c);
+        // The branch-free exp: here the argument can be positive, at most a·shift.
+        block.w = per_lane(|l| exp_weight(-a * (c[l] + 2.0 * t * b[l] + t * t - shift)));
+    }
+    let mut e1 = [0.0; 4];
+    let mut e2 = [0.0; 4];
+    for block in line.iter() {
+        let theta = block.w;
+        let bb = per_lane(|l| block.b[l] + t);
+        let ab2 = per_lane(|l| a * bb[l] * bb[l]);
+        e1 = per_lane(|l| e1[l] + 2.0 * theta[l] * bb[l] * (1.0 - ab2[l]));
+        e2 = per_lane(|l| e2[l] + theta[l] * (2.0 - 10.0 * ab2[l] + 4.0 * ab2[l] * ab2[l]));
+    }
+    *acc = [e1, e2];
 }
 
 /// The most steps one downhill walk may take before its line search gives up.
@@ -61,13 +117,14 @@ const MAX_WALK_STEPS: usize = 1000;
 /// The local minimum of `e(t)` reached by walking downhill from `t = 0`, or `None` when there
 /// is none within `max_travel`.
 pub(crate) fn line_minimum(
-    line: &[LineSample],
+    line: &mut [LineBlock],
     a: f64,
     h: f64,
     cfg: &ProjectionConfig,
 ) -> Option<f64> {
-    let shift = line.iter().map(|s| s.c).fold(f64::INFINITY, f64::min);
-    let f = |t: f64| energy_derivatives(line, a, shift, t);
+    let shift = line.iter().flat_map(|s| s.c).fold(f64::INFINITY, f64::min);
+    let toward: f64 = line.iter().flat_map(|s| s.b).map(|b| -b).sum();
+    let mut f = |t: f64| energy_derivatives(line, a, shift, t);
     let tol = cfg.tolerance * h;
     let max_step = 0.25 * h;
     let (mut e1, mut e2) = f(0.0);
@@ -80,9 +137,10 @@ pub(crate) fn line_minimum(
     // Downhill; at an exact stationary point that is not a minimum, head towards the samples.
     let dir = if e1 != 0.0 {
         -e1.signum()
+    } else if toward < 0.0 {
+        -1.0
     } else {
-        let toward: f64 = line.iter().map(|s| -s.b).sum();
-        if toward < 0.0 { -1.0 } else { 1.0 }
+        1.0
     };
     // March until e' changes sign (a minimum is bracketed) or Newton converges on the way.
     let mut t = 0.0;

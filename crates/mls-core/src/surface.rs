@@ -9,7 +9,7 @@ use crate::error::ConfigError;
 use crate::field::{FieldScratch, Implicit, Sample, evaluate, evaluate_loaded};
 use crate::kernel::{Cutoff, Kernel};
 use crate::math::{Point, UnitNormal, Vector, bounding_box_centre};
-use crate::projection::{LineSample, ProjectionConfig, line_minimum};
+use crate::projection::{LineBlock, ProjectionConfig, line_minimum};
 use crate::status::PointStatus;
 
 /// Who runs the per-point loop. The caller decides (for example a `--threads` option sets up
@@ -297,7 +297,7 @@ pub struct Evaluator<'a> {
     /// Samples near a cluster of queries, filtered per query into `support`.
     candidates: Vec<Sample>,
     scratch: FieldScratch,
-    line: Vec<LineSample>,
+    line: Vec<LineBlock>,
 }
 
 impl Evaluator<'_> {
@@ -463,16 +463,11 @@ impl Evaluator<'_> {
                     PointStatus::TooFewNeighbours
                 });
             }
-            let n = self.weighted_normal(&local)?;
-            self.line.clear();
-            self.line.extend(self.support.iter().map(|q| {
-                let d = local - q.point;
-                LineSample {
-                    b: d.dot(&n),
-                    c: d.norm_squared(),
-                }
-            }));
-            let t = line_minimum(&self.line, a, h, &cfg).ok_or(PointStatus::ProjectionFailed)?;
+            self.scratch.load(&local, &self.support, f64::INFINITY, a);
+            let n = self.scratch.loaded_normal()?;
+            LineBlock::fill(&mut self.line, &local, &n, &self.support);
+            let t =
+                line_minimum(&mut self.line, a, h, &cfg).ok_or(PointStatus::ProjectionFailed)?;
             local += n * t;
             // Below the position's own rounding (8 ulps) no step can be resolved, whatever
             // `tolerance · h` asks for.
@@ -494,27 +489,5 @@ impl Evaluator<'_> {
             curvature,
             implicit,
         })
-    }
-
-    /// n(x) alone (Eq. 2) from the gathered support, without derivatives.
-    fn weighted_normal(&self, x: &Point) -> Result<Vector, PointStatus> {
-        let a = self.surface.kernel.inv_h2();
-        let shift = self
-            .support
-            .iter()
-            .map(|s| (x - s.point).norm_squared())
-            .fold(f64::INFINITY, f64::min);
-        let (m, wsum) = self
-            .support
-            .iter()
-            .fold((Vector::zeros(), 0.0), |(m, wsum), s| {
-                let w = (-a * ((x - s.point).norm_squared() - shift)).exp();
-                (m + s.normal * w, wsum + w)
-            });
-        let r = m.norm();
-        if !(r >= crate::field::MIN_NORMAL_COHERENCE * wsum) {
-            return Err(PointStatus::NormalUndefined);
-        }
-        Ok(m / r)
     }
 }
