@@ -813,6 +813,35 @@ mod isa_tests {
             let a = a.expect("evaluates");
             assert!(a.neighbours > 100 && a.neighbours < 600, "{}", a.neighbours);
             assert_eq!(Ok(a), b);
+
+            // The weights alone (the projection's n(x)).
+            let weights = |kernels: &dyn Fn(&mut [Block], f64) -> f64| {
+                let mut scratch = FieldScratch::default();
+                scratch
+                    .blocks
+                    .resize(samples.len() / LANES + 1, Block::default());
+                let (len, shift) = Portable.load(&mut scratch.blocks, &x, &samples, 0.25, 100.0);
+                let blocks = &mut scratch.blocks[..len.div_ceil(LANES)];
+                let sum = kernels(blocks, shift);
+                (sum, blocks.iter().map(|b| b.w).collect::<Vec<_>>())
+            };
+            assert_eq!(
+                weights(&|b, s| Portable.weights(b, s)),
+                weights(&|b, s| avx2.weights(b, s))
+            );
+
+            // The projection's line energy, at a few points along a line.
+            let n = Vector::new(0.1, -0.2, 1.0).normalize();
+            let mut line = Vec::new();
+            crate::projection::LineBlock::fill(&mut line, &x, &n, &samples[..599]);
+            let mut other = line.clone();
+            for t in [-0.03, 0.0, 0.02] {
+                let (mut p, mut q) = ([[0.0; LANES]; 2], [[0.0; LANES]; 2]);
+                Portable.line_energy(&mut line, 100.0, 0.0, t, &mut p);
+                avx2.line_energy(&mut other, 100.0, 0.0, t, &mut q);
+                assert!(p[0].iter().all(|v| v.is_finite() && *v != 0.0));
+                assert_eq!(p, q);
+            }
         }
     }
 }
