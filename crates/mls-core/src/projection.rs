@@ -8,7 +8,7 @@
 //! about ±h off the surface. The search walks downhill and brackets a sign change of e' from
 //! negative to positive (in the walking direction), so it only ever stops where `e'' ≥ 0`.
 
-use crate::field::{Isa, Kernels, Sample, exp_weight, per_lane};
+use crate::field::{Isa, Kernels, Sample, exp_any, per_lane};
 use crate::math::{Point, Vector};
 
 /// Stopping rules of the projection.
@@ -97,7 +97,7 @@ pub(crate) fn line_energy(
     for block in line.iter_mut() {
         let (b, c) = (block.b, block.c);
         // The branch-free exp: here the argument can be positive, at most a·shift.
-        block.w = per_lane(|l| exp_weight(-a * (c[l] + 2.0 * t * b[l] + t * t - shift)));
+        block.w = per_lane(|l| exp_any(-a * (c[l] + 2.0 * t * b[l] + t * t - shift)));
     }
     let mut e1 = [0.0; 4];
     let mut e2 = [0.0; 4];
