@@ -547,10 +547,10 @@ fn weights(blocks: &mut [Block], shift: f64) -> f64 {
     sum.iter().sum()
 }
 
-/// `exp(−(|d|² − shift))` in place of each `|d|²`. A loop of its own that only stores the
-/// exps, each lane written out: without the products of [`weigh`] after it, the compiler
-/// vectorised the exp (about 30 operations with a division and bit manipulation) only in
-/// that shape, not fused with the sum.
+/// `exp(−(|d|² − shift))` in place of each `|d|²`: a loop that only computes and stores the
+/// exps, each lane written out, which is the shape the compiler reliably vectorises (with the
+/// sum in the same loop the exp stayed scalar). [`weigh`]'s fused loop is vectorised too, but
+/// fragilely: one more select in [`exp_weight`] made it scalar (`cargo xtask bench` shows it).
 #[inline(always)]
 fn exponentiate(blocks: &mut [Block], shift: f64) {
     for block in blocks.iter_mut() {
