@@ -130,8 +130,8 @@ impl FieldScratch {
         let blocks = &mut self.blocks[..needed];
         let (len, shift) = match Isa::detect() {
             #[cfg(target_arch = "x86_64")]
-            Isa::Avx2(k) => k.load(blocks, x, samples, radius2, inv_h2),
-            Isa::Portable(k) => k.load(blocks, x, samples, radius2, inv_h2),
+            Isa::Avx2(k) => k.load_blocks(blocks, x, samples, radius2, inv_h2),
+            Isa::Portable(k) => k.load_blocks(blocks, x, samples, radius2, inv_h2),
         };
         self.len = len;
         self.inv_h2 = inv_h2;
@@ -340,28 +340,63 @@ fn moments(kernels: impl Kernels, blocks: &[Block], k: usize) -> Moments {
     }
 }
 
-/// The per-sample loops, compiled for one instruction set. They are the only code whose cost
-/// grows with the number of samples; the per-point algebra around them is the same for all.
-pub(crate) trait Kernels: Copy {
+/// Declares [`Kernels`] from one list of its loops and implements it twice: for
+/// [`Portable`], and for [`Avx2`] through a `#[target_feature(enable = "avx2")]` copy of each
+/// loop. Each loop is the free function of the same name, `#[inline(always)]` so that it is
+/// compiled into both.
+macro_rules! kernels {
+    ($($(#[$doc:meta])* fn $name:ident($($arg:ident: $ty:ty),*) $(-> $ret:ty)?;)*) => {
+        /// The per-sample loops, compiled for one instruction set. They are the only code whose
+        /// cost grows with the number of samples; the per-point algebra around them is the same
+        /// for all.
+        pub(crate) trait Kernels: Copy {
+            $($(#[$doc])* fn $name(self, $($arg: $ty),*) $(-> $ret)?;)*
+        }
+
+        impl Kernels for Portable {
+            $(fn $name(self, $($arg: $ty),*) $(-> $ret)? {
+                $name($($arg),*)
+            })*
+        }
+
+        #[cfg(target_arch = "x86_64")]
+        impl Avx2 {
+            $(#[target_feature(enable = "avx2")]
+            fn $name($($arg: $ty),*) $(-> $ret)? {
+                $name($($arg),*)
+            })*
+        }
+
+        // SAFETY (each call below): `self` proves that `Avx2::new` found AVX2 on this CPU.
+        #[cfg(target_arch = "x86_64")]
+        #[allow(unsafe_code)]
+        impl Kernels for Avx2 {
+            $(fn $name(self, $($arg: $ty),*) $(-> $ret)? {
+                unsafe { Self::$name($($arg),*) }
+            })*
+        }
+    };
+}
+
+kernels! {
     /// [`load_blocks`].
-    fn load(
-        self,
+    fn load_blocks(
         blocks: &mut [Block],
         x: &Point,
         samples: &[Sample],
         radius2: f64,
-        inv_h2: f64,
+        inv_h2: f64
     ) -> (usize, f64);
     /// [`weigh`].
-    fn weigh(self, blocks: &mut [Block], shift: f64) -> f64;
+    fn weigh(blocks: &mut [Block], shift: f64) -> f64;
     /// [`weights`].
-    fn weights(self, blocks: &mut [Block], shift: f64) -> f64;
+    fn weights(blocks: &mut [Block], shift: f64) -> f64;
     /// [`coefficients`].
-    fn coefficients(self, blocks: &mut [Block], n: &Vector);
+    fn coefficients(blocks: &mut [Block], n: &Vector);
     /// [`lane_moments`].
-    fn lane_moments(self, blocks: &[Block], k: usize, acc: &mut [Lanes; 10]);
+    fn lane_moments(blocks: &[Block], k: usize, acc: &mut [Lanes; 10]);
     /// [`crate::projection::line_energy`].
-    fn line_energy(self, line: &mut [LineBlock], a: f64, shift: f64, t: f64, acc: &mut [Lanes; 2]);
+    fn line_energy(line: &mut [LineBlock], a: f64, shift: f64, t: f64, acc: &mut [Lanes; 2]);
 }
 
 /// The instruction sets [`Kernels`] are compiled for, and the one this CPU runs.
@@ -401,34 +436,6 @@ pub fn kernel_isa() -> &'static str {
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Portable;
 
-impl Kernels for Portable {
-    fn load(
-        self,
-        blocks: &mut [Block],
-        x: &Point,
-        samples: &[Sample],
-        radius2: f64,
-        inv_h2: f64,
-    ) -> (usize, f64) {
-        load_blocks(blocks, x, samples, radius2, inv_h2)
-    }
-    fn weigh(self, blocks: &mut [Block], shift: f64) -> f64 {
-        weigh(blocks, shift)
-    }
-    fn weights(self, blocks: &mut [Block], shift: f64) -> f64 {
-        weights(blocks, shift)
-    }
-    fn coefficients(self, blocks: &mut [Block], n: &Vector) {
-        coefficients(blocks, n)
-    }
-    fn lane_moments(self, blocks: &[Block], k: usize, acc: &mut [Lanes; 10]) {
-        lane_moments(blocks, k, acc)
-    }
-    fn line_energy(self, line: &mut [LineBlock], a: f64, shift: f64, t: f64, acc: &mut [Lanes; 2]) {
-        line_energy(line, a, shift, t, acc)
-    }
-}
-
 /// [`Kernels`] compiled with AVX2. A value exists only on a CPU that has it.
 #[cfg(target_arch = "x86_64")]
 #[derive(Clone, Copy, Debug)]
@@ -438,73 +445,6 @@ pub(crate) struct Avx2(());
 impl Avx2 {
     fn new() -> Option<Self> {
         std::arch::is_x86_feature_detected!("avx2").then_some(Self(()))
-    }
-
-    #[target_feature(enable = "avx2")]
-    fn load(
-        blocks: &mut [Block],
-        x: &Point,
-        samples: &[Sample],
-        radius2: f64,
-        inv_h2: f64,
-    ) -> (usize, f64) {
-        load_blocks(blocks, x, samples, radius2, inv_h2)
-    }
-
-    #[target_feature(enable = "avx2")]
-    fn weigh(blocks: &mut [Block], shift: f64) -> f64 {
-        weigh(blocks, shift)
-    }
-
-    #[target_feature(enable = "avx2")]
-    fn weights(blocks: &mut [Block], shift: f64) -> f64 {
-        weights(blocks, shift)
-    }
-
-    #[target_feature(enable = "avx2")]
-    fn coefficients(blocks: &mut [Block], n: &Vector) {
-        coefficients(blocks, n)
-    }
-
-    #[target_feature(enable = "avx2")]
-    fn lane_moments(blocks: &[Block], k: usize, acc: &mut [Lanes; 10]) {
-        lane_moments(blocks, k, acc)
-    }
-
-    #[target_feature(enable = "avx2")]
-    fn line_energy(line: &mut [LineBlock], a: f64, shift: f64, t: f64, acc: &mut [Lanes; 2]) {
-        line_energy(line, a, shift, t, acc)
-    }
-}
-
-// SAFETY (each call below): `self` proves that `Avx2::new` found AVX2 on this CPU.
-#[cfg(target_arch = "x86_64")]
-#[allow(unsafe_code)]
-impl Kernels for Avx2 {
-    fn load(
-        self,
-        blocks: &mut [Block],
-        x: &Point,
-        samples: &[Sample],
-        radius2: f64,
-        inv_h2: f64,
-    ) -> (usize, f64) {
-        unsafe { Self::load(blocks, x, samples, radius2, inv_h2) }
-    }
-    fn weigh(self, blocks: &mut [Block], shift: f64) -> f64 {
-        unsafe { Self::weigh(blocks, shift) }
-    }
-    fn weights(self, blocks: &mut [Block], shift: f64) -> f64 {
-        unsafe { Self::weights(blocks, shift) }
-    }
-    fn coefficients(self, blocks: &mut [Block], n: &Vector) {
-        unsafe { Self::coefficients(blocks, n) }
-    }
-    fn lane_moments(self, blocks: &[Block], k: usize, acc: &mut [Lanes; 10]) {
-        unsafe { Self::lane_moments(blocks, k, acc) }
-    }
-    fn line_energy(self, line: &mut [LineBlock], a: f64, shift: f64, t: f64, acc: &mut [Lanes; 2]) {
-        unsafe { Self::line_energy(line, a, shift, t, acc) }
     }
 }
 
@@ -808,7 +748,7 @@ mod isa_tests {
         let mut scratch = FieldScratch::default();
         let needed = samples.len() / LANES + 1;
         scratch.blocks.resize(needed, Block::default());
-        let (len, shift) = kernels.load(&mut scratch.blocks, x, samples, 0.25, 100.0);
+        let (len, shift) = kernels.load_blocks(&mut scratch.blocks, x, samples, 0.25, 100.0);
         (scratch.len, scratch.inv_h2, scratch.shift) = (len, 100.0, shift);
         evaluate_with(kernels, &mut scratch)
     }
@@ -855,7 +795,8 @@ mod isa_tests {
                 scratch
                     .blocks
                     .resize(samples.len() / LANES + 1, Block::default());
-                let (len, shift) = Portable.load(&mut scratch.blocks, &x, &samples, 0.25, 100.0);
+                let (len, shift) =
+                    Portable.load_blocks(&mut scratch.blocks, &x, &samples, 0.25, 100.0);
                 let blocks = &mut scratch.blocks[..len.div_ceil(LANES)];
                 let sum = kernels(blocks, shift);
                 (sum, blocks.iter().map(|b| b.w).collect::<Vec<_>>())
