@@ -5,6 +5,7 @@ use std::process::Command;
 
 use anyhow::{Context, Result, bail};
 
+mod accuracy;
 mod bench;
 mod defaults;
 mod faults;
@@ -43,6 +44,7 @@ fn main() -> Result<()> {
     let rest = &args[1..];
     match task.as_str() {
         "validate" => validate::run(&validate::Options::parse(rest)?),
+        "accuracy-explore" => accuracy::explore(rest),
         "faults" => faults::run(),
         "robustness" => robustness::run(&robustness::Options::parse(rest)?),
         "bench" => bench::run(rest),

@@ -3,14 +3,14 @@
 use anyhow::{Context, Result};
 use mls_core::normals::{DEFAULT_NEIGHBOURS, NeighbourGraph, orientation_consistency};
 use mls_core::{
-    AdaptiveConfig, AdaptiveSurface, Curvature, Location, MlsConfig, MlsSurface, Parallelism,
-    Point, PointStatus, Vector,
+    AdaptiveConfig, AdaptiveSurface, Curvature, JetConfig, JetPoint, Location, MlsConfig,
+    MlsSurface, NormalData, Parallelism, Point, PointStatus, Vector,
 };
 use mls_io::{Axis, Column, PlyFormat};
 
 use crate::pipeline::{self, Prepared, Surface, Timings};
 use crate::{
-    At, CurvatureArgs, EvalArgs, InfoArgs, NormalsArgs, ProjectArgs, interactive, status_code,
+    At, CurvatureArgs, EvalArgs, Method, InfoArgs, NormalsArgs, ProjectArgs, interactive, status_code,
 };
 
 const NAN3: [f64; 3] = [f64::NAN; 3];
@@ -46,6 +46,9 @@ struct CurvatureColumns {
     /// Chosen scale and noise estimate, `--adaptive` only.
     h: Vec<f64>,
     noise: Vec<f64>,
+    /// Predicted errors of k1 and k2, `--method jet` only.
+    k1_sd: Vec<f64>,
+    k2_sd: Vec<f64>,
 }
 
 impl CurvatureColumns {
@@ -61,6 +64,8 @@ impl CurvatureColumns {
             status: Vec::with_capacity(n),
             h: Vec::new(),
             noise: Vec::new(),
+            k1_sd: Vec::new(),
+            k2_sd: Vec::new(),
         }
     }
 
@@ -93,6 +98,12 @@ impl CurvatureColumns {
 
 pub fn curvature(a: CurvatureArgs) -> Result<()> {
     pipeline::check_output(&a.input, &a.out.output)?;
+    if a.adaptive && a.method == Method::Jet {
+        anyhow::bail!(
+            "--adaptive is the per-point scale of --method paper; the default jet method chooses \
+             its support per point by itself (use --method paper --adaptive for the MLS surface)"
+        );
+    }
     let s = &a.surface;
     pipeline::with_threads(s.run.threads, || {
         let mut t = Timings::default();
@@ -101,6 +112,7 @@ pub fn curvature(a: CurvatureArgs) -> Result<()> {
             mut points,
             scale,
             normals_source,
+            normals_from_file,
             surface,
         } = pipeline::prepare(&a.input, s, &mut t, |p, n, h, cutoff| {
             Ok(if a.adaptive {
@@ -120,12 +132,38 @@ pub fn curvature(a: CurvatureArgs) -> Result<()> {
             At::Input => "curvature",
             At::Projected => "projection",
         };
+        // Measured normals are data for the jet; estimated ones only give its frame (fitted
+        // as slopes they would count the positions twice and bring the covariance's bias).
+        let jet = JetConfig {
+            normals: if normals_from_file {
+                NormalData::Slopes
+            } else {
+                NormalData::Ignore
+            },
+            ..JetConfig::default()
+        };
         let n = points.len();
         let mut out = CurvatureColumns::with_capacity(n);
         t.time(label, || {
             crate::progress::chunked(n, label, interactive(s.run.quiet), |range| {
                 let chunk = &mut points[range];
                 match &surface {
+                    Surface::Fixed(surface) if a.method == Method::Jet => {
+                        for (r, p) in surface
+                            .jet_at_points(chunk, &jet, par)
+                            .iter()
+                            .zip(chunk)
+                        {
+                            let at = |j: &JetPoint| match a.at {
+                                At::Input => *p,
+                                At::Projected => j.foot,
+                            };
+                            out.push(r.as_ref().map(|j| (at(j), j.curvature)).map_err(|e| *e), p);
+                            let sd = r.as_ref().map_or([f64::NAN; 2], |j| j.predicted_error());
+                            out.k1_sd.push(sd[0]);
+                            out.k2_sd.push(sd[1]);
+                        }
+                    }
                     Surface::Fixed(surface) => {
                         let results = match a.at {
                             At::Input => surface.curvature_at_points(chunk, par),
@@ -180,6 +218,10 @@ pub fn curvature(a: CurvatureArgs) -> Result<()> {
             columns.push(Column::f64("h", &out.h));
             columns.push(Column::f64("noise", &out.noise));
         }
+        if a.method == Method::Jet {
+            columns.push(Column::f64("k1_sd", &out.k1_sd));
+            columns.push(Column::f64("k2_sd", &out.k2_sd));
+        }
         columns.push(Column::i32("status", &out.status));
         t.time("write", || {
             mls_io::write_point_cloud(&a.out.output, &columns, ply_format(a.out.ascii))
@@ -199,7 +241,23 @@ pub fn curvature(a: CurvatureArgs) -> Result<()> {
             } else {
                 eprintln!("  h               {:.6} = {}", scale.h, scale.why);
             }
-            eprintln!("  cutoff          {}", cutoff_text(s.cutoff));
+            match a.method {
+                Method::Jet => eprintln!(
+                    "  method          jet: weighted degree-{} fit, support {}h to {:.1}h chosen per point; normals {}",
+                    jet.degree,
+                    jet.radius,
+                    jet.max_radius(),
+                    if normals_from_file {
+                        "fitted as slopes"
+                    } else {
+                        "give the frame only"
+                    }
+                ),
+                Method::Paper => {
+                    eprintln!("  method          paper: closed-form curvature of the MLS surface");
+                    eprintln!("  cutoff          {}", cutoff_text(s.cutoff));
+                }
+            }
             eprintln!("  normals         {normals_source}");
             eprintln!(
                 "  evaluated at    {}",
@@ -214,6 +272,9 @@ pub fn curvature(a: CurvatureArgs) -> Result<()> {
             eprintln!("  k2              {}", pipeline::percentiles(&out.k2));
             eprintln!("  mean            {}", pipeline::percentiles(&out.mean));
             eprintln!("  gauss           {}", pipeline::percentiles(&out.gauss));
+            if a.method == Method::Jet {
+                eprintln!("  k1 predicted sd {}", pipeline::percentiles(&out.k1_sd));
+            }
             print_timings(&t, n);
             eprintln!("  wrote           {}", a.out.output.display());
         }
@@ -421,6 +482,7 @@ pub fn project(a: ProjectArgs) -> Result<()> {
             scale,
             normals_source,
             surface,
+            ..
         } = pipeline::prepare(&a.input, s, &mut t, pipeline::fixed_surface)?;
         let n = points.len();
         let mut nrm = Vec::with_capacity(n);

@@ -74,6 +74,18 @@ enum At {
     Projected,
 }
 
+/// The curvature estimator.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+enum Method {
+    /// Weighted degree-4 polynomial jets in the frame of the MLS normal, with the support
+    /// chosen per point and a predicted error per point (columns k1_sd, k2_sd). Accurate on
+    /// irregular samples, scan boundaries and noise (docs/accuracy.md).
+    Jet,
+    /// The Amenta-Kil MLS surface in closed form (Yang & Qian 2007): exact for that surface,
+    /// accurate on regular grids, biased on irregular samples.
+    Paper,
+}
+
 /// How a command runs: threads and chatter.
 #[derive(Debug, Args)]
 struct RunArgs {
@@ -133,13 +145,18 @@ struct CurvatureArgs {
     out: OutputArgs,
     #[command(flatten)]
     surface: SurfaceArgs,
-    /// Evaluate at the input points or at their projections onto the MLS surface.
+    /// The estimator: `jet` (default) or `paper` (the closed-form MLS surface).
+    #[arg(long, value_enum, default_value_t = Method::Jet)]
+    method: Method,
+    /// Evaluate at the input points or at their projections onto the surface (the MLS
+    /// surface for `--method paper`, the fitted jet for `--method jet`).
     #[arg(long, value_enum, default_value_t = At::Input)]
     at: At,
     /// Choose h per point: from the scale given by --h or --h-factor up to 4 times it, the
     /// largest scale whose estimate agrees with the smaller ones within the local noise, with
     /// the h² bias extrapolated away. Adds the columns `h` and `noise`. For noisy scans; on
     /// clean data use it with `--at projected`. Builds five surfaces (memory and time grow).
+    /// `--method paper` only (the jet chooses its support per point by itself).
     #[arg(long)]
     adaptive: bool,
 }

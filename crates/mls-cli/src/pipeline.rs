@@ -100,6 +100,8 @@ pub fn choose_h(
 pub struct Normals {
     pub normals: Vec<Option<Vector>>,
     pub source: String,
+    /// Whether they are the file's (measured data) rather than estimated from the points.
+    pub from_file: bool,
 }
 
 /// Normals from `file_normals` (the file's, consumed here so that they are not held beside
@@ -138,7 +140,11 @@ pub fn normals(
         } else {
             format!("from the file ({bad} zero normals left out of the surface)")
         };
-        return Ok(Normals { normals, source });
+        return Ok(Normals {
+            normals,
+            source,
+            from_file: true,
+        });
     }
     let config = NormalsConfig {
         k: DEFAULT_NEIGHBOURS,
@@ -169,6 +175,7 @@ pub fn normals(
     Ok(Normals {
         normals: est.normals().into_iter().map(Result::ok).collect(),
         source,
+        from_file: false,
     })
 }
 
@@ -181,6 +188,8 @@ pub struct Prepared<S = MlsSurface> {
     pub scale: Scale,
     /// Where the normals came from, for the summary.
     pub normals_source: String,
+    /// Whether the normals are the file's.
+    pub normals_from_file: bool,
     pub surface: S,
 }
 
@@ -225,7 +234,11 @@ pub fn prepare<S>(
     let scale = t.time("spacing", || {
         choose_h(&points, s.scale.h, s.scale.h_factor, par, input)
     })?;
-    let Normals { normals, source } = t.time("normals", || {
+    let Normals {
+        normals,
+        source,
+        from_file,
+    } = t.time("normals", || {
         normals(
             file_normals,
             &points,
@@ -243,6 +256,7 @@ pub fn prepare<S>(
         points,
         scale,
         normals_source: source,
+        normals_from_file: from_file,
         surface,
     })
 }

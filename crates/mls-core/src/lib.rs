@@ -18,6 +18,7 @@ pub mod adaptive;
 pub mod curvature;
 pub mod error;
 pub mod field;
+pub mod jet;
 pub mod kernel;
 pub mod math;
 pub mod normals;
@@ -32,6 +33,7 @@ pub use adaptive::{
 pub use curvature::{Curvature, curvature};
 pub use error::ConfigError;
 pub use field::{Implicit, NormalField, Sample};
+pub use jet::{JetConfig, JetFit, JetPoint, NormalData};
 pub use kernel::{Cutoff, Kernel};
 pub use math::{Matrix, Point, UnitNormal, Vector};
 pub use normals::{

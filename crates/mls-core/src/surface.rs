@@ -7,6 +7,7 @@ use rayon::prelude::*;
 use crate::curvature::{Curvature, curvature};
 use crate::error::ConfigError;
 use crate::field::{FieldScratch, Implicit, Sample, evaluate, evaluate_loaded};
+use crate::jet::{self, JetConfig, JetPoint};
 use crate::kernel::{Cutoff, Kernel};
 use crate::math::{Point, UnitNormal, Vector, bounding_box_centre};
 use crate::projection::{LineBlock, ProjectionConfig, line_minimum};
@@ -156,6 +157,7 @@ impl MlsSurface {
             candidates: Vec::new(),
             scratch: FieldScratch::default(),
             line: Vec::new(),
+            offsets: Vec::new(),
         }
     }
 
@@ -170,6 +172,27 @@ impl MlsSurface {
         self.map_clusters(queries, par, |ev, cluster| {
             ev.curvature_of_cluster(queries, cluster, radius)
         })
+    }
+
+    /// Curvature of a weighted polynomial jet at each query point, in query order (see
+    /// [`crate::jet`]).
+    pub fn jet_at_points(
+        &self,
+        queries: &[Point],
+        config: &JetConfig,
+        par: Parallelism,
+    ) -> Vec<Result<JetPoint, PointStatus>> {
+        match par {
+            Parallelism::Sequential => {
+                let mut ev = self.evaluator();
+                queries.iter().map(|q| ev.jet_at(q, config)).collect()
+            }
+            Parallelism::Rayon => queries
+                .par_iter()
+                .with_min_len(256)
+                .map_init(|| self.evaluator(), |ev, q| ev.jet_at(q, config))
+                .collect(),
+        }
     }
 
     /// Projects each query point onto the MLS surface and evaluates curvature there.
@@ -298,9 +321,96 @@ pub struct Evaluator<'a> {
     candidates: Vec<Sample>,
     scratch: FieldScratch,
     line: Vec<LineBlock>,
+    /// Samples relative to the query, for the jet fits.
+    offsets: Vec<Sample>,
 }
 
 impl Evaluator<'_> {
+    /// Curvature of a weighted polynomial jet at the world-space point `x`, with the scale
+    /// chosen per point from the ladder of [`JetConfig`] (see [`crate::jet`]).
+    pub fn jet_at(&mut self, x: &Point, config: &JetConfig) -> Result<JetPoint, PointStatus> {
+        if !x.iter().all(|c| c.is_finite()) {
+            return Err(PointStatus::InvalidQuery);
+        }
+        let local = x - self.surface.origin;
+        let h = self.surface.kernel.h();
+        let mut frame = None;
+        let mut best: Option<JetPoint> = None;
+        let mut failure = PointStatus::NoNeighbours;
+        let (mut lo, mut hi) = ([f64::NEG_INFINITY; 2], [f64::INFINITY; 2]);
+        for j in 0..config.scales.max(1) {
+            let radius = config.radius * h * std::f64::consts::SQRT_2.powi(j as i32);
+            self.gather(&local, Some(radius));
+            if self.support.len() < 6 {
+                failure = if self.support.is_empty() {
+                    PointStatus::NoNeighbours
+                } else {
+                    PointStatus::TooFewNeighbours
+                };
+                continue;
+            }
+            let frame = *frame.get_or_insert_with(|| {
+                // The frame normal: the input normals averaged with the jet's weights.
+                let inv_r2 = 1.0 / (radius * radius);
+                let sum: Vector = self
+                    .support
+                    .iter()
+                    .map(|s| {
+                        let t = (1.0 - (s.point - local).norm_squared() * inv_r2).max(0.0);
+                        s.normal * (t * t * t)
+                    })
+                    .sum();
+                UnitNormal::new(sum).ok().map(|n| jet::frame(&n.into_inner()))
+            });
+            let Some(frame) = frame else {
+                return Err(PointStatus::NormalUndefined);
+            };
+            self.offsets.clear();
+            self.offsets.extend(self.support.iter().map(|s| Sample {
+                point: Point::from(s.point - local),
+                normal: s.normal,
+            }));
+            let Some(fit) = jet::fit(
+                &self.offsets,
+                &frame,
+                radius,
+                config.degree,
+                config.normals,
+            ) else {
+                if best.is_some() {
+                    break;
+                }
+                failure = PointStatus::TooFewNeighbours;
+                continue;
+            };
+            let Ok(p) = jet::jet_curvature(x, &frame, &fit) else {
+                failure = PointStatus::GradientVanishes;
+                break;
+            };
+            let k = [p.curvature.k1, p.curvature.k2];
+            let mut agree = true;
+            for i in 0..2 {
+                lo[i] = lo[i].max(k[i] - config.confidence * p.sd[i]);
+                hi[i] = hi[i].min(k[i] + config.confidence * p.sd[i]);
+                agree &= lo[i] <= hi[i];
+            }
+            match best.as_mut() {
+                Some(b) if !agree => {
+                    // The next scale's estimate measures the bias of the chosen one: with the
+                    // bias ∝ ρ⁴ (degree 4) the step of √2 in ρ quadruples it.
+                    b.bias = [0, 1].map(|i| (k[i] - b.curvature_k(i)).abs() / 3.0);
+                    break;
+                }
+                Some(b) => {
+                    let bias = [0, 1].map(|i| (k[i] - b.curvature_k(i)).abs() * 4.0 / 3.0);
+                    best = Some(JetPoint { bias, ..p });
+                }
+                None => best = Some(p),
+            }
+        }
+        best.ok_or(failure)
+    }
+
     /// Collects into the internal buffer the samples within `radius` of `x` (all samples when
     /// `radius` is `None`); `x` is in the surface's internal frame.
     fn gather(&mut self, x: &Point, radius: Option<f64>) {

@@ -44,7 +44,10 @@ pub use parametric::{
     IntervalKind, Orientation, ParamInterval, ParametricSurface, Projection, SurfaceDerivatives,
     closest_point_newton, closest_point_search, derivatives, differential_geometry, position,
 };
-pub use sampling::{Sample, fibonacci_sphere, grid, normals, points, random, surface_points};
+pub use sampling::{
+    Sample, fibonacci_sphere, grid, jittered_grid, normals, points, random, random_area_uniform,
+    surface_points,
+};
 pub use shapes::{
     BSplineBasis, BSplineSurface, Bump, Cylinder, Ellipsoid, HeightField, HeightFieldConfig,
     Saddle, Sphere, Torus, Wave,

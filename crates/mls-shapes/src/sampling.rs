@@ -68,6 +68,75 @@ pub fn random<S: ParametricSurface + ?Sized>(surface: &S, n: usize, seed: u64) -
         .collect()
 }
 
+/// `n` samples uniform in area (not in the parameters), reproducible from `seed` (ChaCha8):
+/// parameters drawn uniformly, kept with probability `|r_u × r_v| / bound` (rejection), where
+/// `bound` is 1.25 × the largest area element on a 128 × 128 parameter grid.
+///
+/// # Panics
+/// If a drawn sample's area element exceeds the bound (a shape whose area element peaks
+/// between grid nodes by more than 25 %).
+#[must_use]
+pub fn random_area_uniform<S: ParametricSurface + ?Sized>(
+    surface: &S,
+    n: usize,
+    seed: u64,
+) -> Vec<Sample> {
+    let [du, dv] = surface.domain();
+    let area = |u: f64, v: f64| crate::parametric::derivatives(surface, u, v).area_element();
+    let bound = 1.25
+        * (0..128)
+            .flat_map(|i| (0..128).map(move |j| (i, j)))
+            .map(|(i, j)| area(du.grid_value(i, 128), dv.grid_value(j, 128)))
+            .filter(|a| a.is_finite())
+            .fold(0.0f64, f64::max);
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let mut out = Vec::with_capacity(n);
+    while out.len() < n {
+        let u = du.lerp(rng.sample(Open01));
+        let v = dv.lerp(rng.sample(Open01));
+        let a = area(u, v);
+        assert!(a <= bound, "area element {a} above the rejection bound {bound}");
+        if rng.random::<f64>() * bound < a {
+            out.push(Sample {
+                uv: [u, v],
+                ij: [out.len(), 0],
+                surface: surface.at(u, v),
+            });
+        }
+    }
+    out
+}
+
+/// The `nu × nv` grid of [`grid`] with each parameter moved by a uniform random fraction in
+/// `[−jitter, jitter]` of its cell, reproducible from `seed` (ChaCha8). Closed intervals keep
+/// their samples inside the domain (clamped).
+#[must_use]
+pub fn jittered_grid<S: ParametricSurface + ?Sized>(
+    surface: &S,
+    nu: usize,
+    nv: usize,
+    jitter: f64,
+    seed: u64,
+) -> Vec<Sample> {
+    let [du, dv] = surface.domain();
+    let (cu, cv) = (du.len() / nu as f64, dv.len() / nv as f64);
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let mut shift = |cell: f64| cell * jitter * (2.0 * rng.random::<f64>() - 1.0);
+    let mut out = Vec::with_capacity(nu * nv);
+    for i in 0..nu {
+        for j in 0..nv {
+            let u = du.normalize(du.grid_value(i, nu) + shift(cu));
+            let v = dv.normalize(dv.grid_value(j, nv) + shift(cv));
+            out.push(Sample {
+                uv: [u, v],
+                ij: [i, j],
+                surface: surface.at(u, v),
+            });
+        }
+    }
+    out
+}
+
 /// `n` near-uniform points on the sphere of the given radius centred on the origin (the
 /// Fibonacci lattice: heights `z_i = 1 − (2i + 1)/n`, azimuths stepping by the golden angle
 /// `π (3 − √5)`), with outward normals and `k1 = k2 = 1/radius`.

@@ -45,6 +45,29 @@ impl Torus {
         [theta, phi]
     }
 
+    /// What a scanner looking straight down sees: the points where vertical rays on the lines
+    /// `y = −(R + r) + j · between` (spaced `along` in x along each line) hit the upper half
+    /// `z > 0` of the torus. The half is open: where the rays graze the equators, the sampling
+    /// thins out and stops, a scan boundary.
+    #[must_use]
+    pub fn top_down_scan(&self, along: f64, between: f64) -> Vec<SurfacePoint> {
+        let extent = self.major + self.minor;
+        let steps = |d: f64| (2.0 * extent / d).floor() as usize + 1;
+        let mut out = Vec::new();
+        for j in 0..steps(between) {
+            let y = -extent + j as f64 * between;
+            for i in 0..steps(along) {
+                let x = -extent + i as f64 * along;
+                let d = x.hypot(y) - self.major;
+                if d.abs() < self.minor {
+                    let z = ((self.minor - d) * (self.minor + d)).sqrt();
+                    out.push(self.at(y.atan2(x).rem_euclid(TAU), z.atan2(d)));
+                }
+            }
+        }
+        out
+    }
+
     /// The point nearest to `p`, with its geometry.
     #[must_use]
     pub fn closest_point(&self, p: &Point) -> SurfacePoint {
