@@ -166,7 +166,11 @@ fn run_method(method: &Method, cloud: &Cloud, normals: &[Vector], h: f64) -> Res
                 r.iter()
                     .map(|r| r.map_or(nan, |p| [p.curvature.k1, p.curvature.k2]))
                     .collect(),
-                Some(r.iter().map(|r| r.map_or(nan, |p| p.predicted_error())).collect()),
+                Some(
+                    r.iter()
+                        .map(|r| r.map_or(nan, |p| p.predicted_error()))
+                        .collect(),
+                ),
             )
         }
         Method::Reference => (reference_jets(&cloud.points, normals, 50), None),
@@ -204,7 +208,11 @@ pub(crate) fn reference_jets(points: &[Point], normals: &[Vector], k: usize) -> 
             if w.dot(n) < 0.0 {
                 w = -w;
             }
-            let u = w.cross(&if w.x.abs() < 0.9 { Vector::x() } else { Vector::y() });
+            let u = w.cross(&if w.x.abs() < 0.9 {
+                Vector::x()
+            } else {
+                Vector::y()
+            });
             let u = u.normalize();
             let v = w.cross(&u);
             let scale = nb.iter().map(|d| d.norm()).fold(0.0f64, f64::max);
@@ -275,7 +283,10 @@ fn stats(cloud: &Cloud, k: &[[f64; 2]]) -> Stats {
         out.nrms[c] = ms.sqrt() / max;
         e.iter_mut().for_each(|x| *x = x.abs());
         e.sort_unstable_by(f64::total_cmp);
-        out.p95[c] = e.get((e.len() as f64 * 0.95) as usize).copied().unwrap_or(f64::NAN);
+        out.p95[c] = e
+            .get((e.len() as f64 * 0.95) as usize)
+            .copied()
+            .unwrap_or(f64::NAN);
         if c == 0 {
             out.failed = k.len() - e.len();
         }
@@ -347,7 +358,11 @@ pub(crate) fn explore(args: &[String]) -> Result<()> {
                     s.sd[0],
                     s.failed,
                     e.seconds,
-                    calib.map_or(String::new(), |c| c.iter().map(|x| format!("{x:.2}")).collect::<Vec<_>>().join(" "))
+                    calib.map_or(String::new(), |c| c
+                        .iter()
+                        .map(|x| format!("{x:.2}"))
+                        .collect::<Vec<_>>()
+                        .join(" "))
                 );
                 println!("{line}");
                 writeln!(md, "{line}")?;

@@ -14,6 +14,10 @@ use crate::validate_shapes::{self as cases, CaseKind};
 
 /// Differences above this fail the run.
 const THRESHOLD: f64 = 1e-10;
+/// The jet's predicted sd goes through M⁻¹ twice and through residuals that are rounding-sized
+/// on exact data; with M's condition number allowed up to 1e10 (the pivot floor), two correct
+/// routes differ by up to about 1e-6 relative. Measured worst: 2.2e-6.
+const SD_THRESHOLD: f64 = 1e-5;
 /// Default base seed; every case derives its own seed from it and prints it when it is worst.
 const DEFAULT_SEED: u64 = 0x4d4c_5321;
 
@@ -69,7 +73,7 @@ fn parse_u64(v: Option<&String>) -> Result<u64> {
 }
 
 /// The quantities compared, in report order.
-const QUANTITIES: [&str; 12] = [
+const QUANTITIES: [&str; 16] = [
     "n",
     "J",
     "∂²n",
@@ -82,6 +86,10 @@ const QUANTITIES: [&str; 12] = [
     "k2",
     "directions",
     "Eq.5 = Eq.7",
+    "jet k1",
+    "jet k2",
+    "jet predicted sd",
+    "jet support and degree",
 ];
 
 #[derive(Clone, Copy, Debug, Default)]
@@ -142,7 +150,7 @@ pub(crate) fn run(o: &Options) -> Result<()> {
     writeln!(
         report,
         "## Closed form against hyper-dual AD\n\n{} evaluations ({} skipped where n or ∇g is undefined) on {} cores in {elapsed:.1} s. \
-         Threshold {THRESHOLD:e}. Replay a case with `cargo xtask validate --replay <seed>`.\n",
+         Threshold {THRESHOLD:e} ({SD_THRESHOLD:e} for the jet's predicted sd). Replay a case with `cargo xtask validate --replay <seed>`.\n",
         tally.evals,
         tally.skipped,
         rayon::current_num_threads()
@@ -155,7 +163,12 @@ pub(crate) fn run(o: &Options) -> Result<()> {
             "| {name} | {:.2e} | {:#x} | {} |",
             w.value, w.seed, w.evals
         )?;
-        if !(w.value <= THRESHOLD) || w.evals == 0 {
+        let threshold = if *name == "jet predicted sd" {
+            SD_THRESHOLD
+        } else {
+            THRESHOLD
+        };
+        if !(w.value <= threshold) || w.evals == 0 {
             failed.push(name.to_string());
         }
     }
@@ -237,6 +250,7 @@ fn one_case(seed: u64, queries: usize) -> Tally {
     };
     let mut ev = surface.evaluator();
     let a = 1.0 / (patch.h * patch.h);
+    let mut jet_queries = Vec::new();
     for _ in 0..queries {
         // On the surface near the centre, or off it by up to ±h along the normal.
         let base = patch.query_base(&mut rng);
@@ -246,6 +260,7 @@ fn one_case(seed: u64, queries: usize) -> Tally {
             rng.random_range(-1.0..1.0) * patch.h
         };
         let x = base.0 + base.1 * offset;
+        jet_queries.push(x);
         let Ok(closed) = ev.curvature_at(&x) else {
             tally.skipped += 1;
             continue;
@@ -255,7 +270,58 @@ fn one_case(seed: u64, queries: usize) -> Tally {
         compare(&mut tally, seed, patch.h, &closed, &w, &x, &support, a);
         tally.evals += 1;
     }
+    compare_jets(&mut tally, seed, &patch, &surface, &jet_queries, &mut rng);
     tally
+}
+
+/// The jet estimator through the whole-cloud entry point against its witness, which filters
+/// its support from every sample of the patch by brute force.
+fn compare_jets(
+    tally: &mut Tally,
+    seed: u64,
+    patch: &cases::Patch,
+    surface: &MlsSurface,
+    queries: &[Point],
+    rng: &mut ChaCha8Rng,
+) {
+    let config = mls_core::JetConfig {
+        normals: if rng.random_bool(0.5) {
+            mls_core::NormalData::Slopes
+        } else {
+            mls_core::NormalData::Ignore
+        },
+        ..mls_core::JetConfig::default()
+    };
+    let samples: Vec<mls_core::Sample> = patch
+        .points
+        .iter()
+        .zip(&patch.normals)
+        .map(|(p, n)| mls_core::Sample {
+            point: *p,
+            normal: n.normalize(),
+        })
+        .collect();
+    let results = surface.jet_at_points(queries, &config, mls_core::Parallelism::Rayon);
+    for (x, r) in queries.iter().zip(results) {
+        let witness = mls_ad::jet_witness(&x.coords, &samples, patch.h, &config);
+        match (r, witness) {
+            (Ok(j), Some(w)) => {
+                let kappa = w.k1.abs().max(w.k2.abs()).max(1.0 / patch.h);
+                tally.record(12, (j.curvature.k1 - w.k1).abs() / kappa, seed);
+                tally.record(13, (j.curvature.k2 - w.k2).abs() / kappa, seed);
+                let sd_scale = w.sd[0].max(w.sd[1]).max(1e-9 * kappa);
+                let sd = (j.sd[0] - w.sd[0]).abs().max((j.sd[1] - w.sd[1]).abs());
+                tally.record(14, sd / sd_scale, seed);
+                let same = j.fit.degree == w.degree && j.fit.radius == w.radius;
+                tally.record(15, if same { 0.0 } else { 1.0 }, seed);
+                tally.evals += 1;
+            }
+            // Both find the point degenerate: nothing to compare.
+            (Err(_), None) => tally.skipped += 1,
+            // One side failed where the other did not: as wrong as a different number.
+            _ => tally.record(15, 1.0, seed),
+        }
+    }
 }
 
 #[allow(clippy::too_many_arguments)]

@@ -6,6 +6,9 @@
 //! search only, never its derivative or curvature code. Generic dual-number code lives here
 //! and nowhere else.
 
+mod jet;
+
+pub use jet::{JetWitness, jet_witness};
 use mls_core::Sample;
 use nalgebra::{Matrix3, SVector, SymmetricEigen, Vector3};
 use num_dual::{DualNum, gradient, hessian};

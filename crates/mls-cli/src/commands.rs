@@ -10,7 +10,8 @@ use mls_io::{Axis, Column, PlyFormat};
 
 use crate::pipeline::{self, Prepared, Surface, Timings};
 use crate::{
-    At, CurvatureArgs, EvalArgs, Method, InfoArgs, NormalsArgs, ProjectArgs, interactive, status_code,
+    At, CurvatureArgs, EvalArgs, InfoArgs, Method, NormalsArgs, ProjectArgs, interactive,
+    status_code,
 };
 
 const NAN3: [f64; 3] = [f64::NAN; 3];
@@ -149,11 +150,7 @@ pub fn curvature(a: CurvatureArgs) -> Result<()> {
                 let chunk = &mut points[range];
                 match &surface {
                     Surface::Fixed(surface) if a.method == Method::Jet => {
-                        for (r, p) in surface
-                            .jet_at_points(chunk, &jet, par)
-                            .iter()
-                            .zip(chunk)
-                        {
+                        for (r, p) in surface.jet_at_points(chunk, &jet, par).iter().zip(chunk) {
                             let at = |j: &JetPoint| match a.at {
                                 At::Input => *p,
                                 At::Projected => j.foot,

@@ -237,7 +237,15 @@ pub fn fit(
     });
     heights.symmetrise(terms);
     slopes.symmetrise(terms);
+    // A degree needs 1.5 samples per coefficient (a count, so that the choice never hangs on
+    // rounding); the pivot test in `solve` only catches degenerate layouts such as a line.
     let mut deg = max_degree;
+    while deg > 2 && (count as f64) < MIN_SAMPLES_PER_COEFFICIENT * coefficient_count(deg) as f64 {
+        deg -= 1;
+    }
+    if (count as f64) < MIN_SAMPLES_PER_COEFFICIENT * coefficient_count(2) as f64 {
+        return None;
+    }
     loop {
         let fitted = match deg {
             4 => solve::<15>(samples, frame, radius, normals, &heights, &slopes),
@@ -291,6 +299,12 @@ fn for_each_row(
         if !(s < 1.0) {
             continue;
         }
+        // A sample whose normal faces away from the frame lies on another sheet (the far
+        // side of a thin part): its height would pull the fit between the two.
+        let c = sample.normal.dot(n);
+        if !(c > 0.0) {
+            continue;
+        }
         let w = (1.0 - s) * (1.0 - s) * (1.0 - s);
         // Scaled coordinates keep the normal equations O(1) whatever the units.
         let (u, v, z) = (d.dot(t1) / radius, d.dot(t2) / radius, d.dot(n) / radius);
@@ -301,7 +315,7 @@ fn for_each_row(
         });
         if normals == NormalData::Slopes {
             let nu = &sample.normal;
-            let (a, b, c) = (nu.dot(t1), nu.dot(t2), nu.dot(n));
+            let (a, b) = (nu.dot(t1), nu.dot(t2));
             if c > 0.5 {
                 let (du, dv) = monomial_gradients(u, v);
                 f(Row::Slope {
@@ -328,6 +342,13 @@ struct Solution {
     covariance: Matrix,
 }
 
+/// Samples per coefficient a degree needs.
+pub const MIN_SAMPLES_PER_COEFFICIENT: f64 = 1.5;
+
+/// Predicted standard deviations never fall below this fraction of `1/ρ`: below it an exact
+/// fit's residual is rounding, and a zero-width interval would make the scale choice follow it.
+pub const SD_FLOOR: f64 = 1e-8;
+
 /// Relative weight of slope equations against height equations is bounded: the ratio of two
 /// noise estimates is unreliable beyond this.
 const MAX_SLOPE_WEIGHT: f64 = 1e4;
@@ -345,7 +366,12 @@ fn solve<const N: usize>(
     let block = |m: &SMatrix<f64, 15, 15>| -> SMatrix<f64, N, N> {
         m.fixed_view::<N, N>(0, 0).into_owned()
     };
-    let (hp, hp2, sp, sp2) = (block(&heights.m), block(&heights.m2), block(&slopes.m), block(&slopes.m2));
+    let (hp, hp2, sp, sp2) = (
+        block(&heights.m),
+        block(&heights.m2),
+        block(&slopes.m),
+        block(&slopes.m2),
+    );
     let (rp, rs) = (
         heights.rhs.fixed_view::<N, 1>(0, 0).into_owned(),
         slopes.rhs.fixed_view::<N, 1>(0, 0).into_owned(),
@@ -390,7 +416,11 @@ fn solve<const N: usize>(
             return None;
         }
         let var_h = rss_h / dof_h;
-        let var_s = if use_slopes && dof_s > 0.0 { rss_s / dof_s } else { 0.0 };
+        let var_s = if use_slopes && dof_s > 0.0 {
+            rss_s / dof_s
+        } else {
+            0.0
+        };
         let sel = inv.fixed_columns::<3>(A20).into_owned();
         let cov_m = hp2 * var_h + sp2 * (lambda * lambda * var_s);
         let cov = sel.transpose() * cov_m * sel;
@@ -465,7 +495,10 @@ pub fn jet_curvature(
     let sd = [c.d1, c.d2].map(|d| {
         let (cs, sn) = (d.dot(t1), d.dot(t2));
         let g = Vector::new(cs * cs, cs * sn, sn * sn) * (2.0 / len);
-        g.dot(&(fit.covariance * g)).max(0.0).sqrt()
+        g.dot(&(fit.covariance * g))
+            .max(0.0)
+            .sqrt()
+            .max(SD_FLOOR / fit.radius)
     });
     Ok(JetPoint {
         foot: x + n * a[0],

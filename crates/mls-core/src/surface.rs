@@ -360,7 +360,9 @@ impl Evaluator<'_> {
                         s.normal * (t * t * t)
                     })
                     .sum();
-                UnitNormal::new(sum).ok().map(|n| jet::frame(&n.into_inner()))
+                UnitNormal::new(sum)
+                    .ok()
+                    .map(|n| jet::frame(&n.into_inner()))
             });
             let Some(frame) = frame else {
                 return Err(PointStatus::NormalUndefined);
@@ -370,13 +372,8 @@ impl Evaluator<'_> {
                 point: Point::from(s.point - local),
                 normal: s.normal,
             }));
-            let Some(fit) = jet::fit(
-                &self.offsets,
-                &frame,
-                radius,
-                config.degree,
-                config.normals,
-            ) else {
+            let Some(fit) = jet::fit(&self.offsets, &frame, radius, config.degree, config.normals)
+            else {
                 if best.is_some() {
                     break;
                 }

@@ -95,7 +95,10 @@ pub fn random_area_uniform<S: ParametricSurface + ?Sized>(
         let u = du.lerp(rng.sample(Open01));
         let v = dv.lerp(rng.sample(Open01));
         let a = area(u, v);
-        assert!(a <= bound, "area element {a} above the rejection bound {bound}");
+        assert!(
+            a <= bound,
+            "area element {a} above the rejection bound {bound}"
+        );
         if rng.random::<f64>() * bound < a {
             out.push(Sample {
                 uv: [u, v],

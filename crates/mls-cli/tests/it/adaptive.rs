@@ -24,7 +24,15 @@ fn adaptive_columns_match_the_library_and_beat_one_h_under_noise() {
         let out = dir.path().join(format!("out-{adaptive}.csv"));
         let mut cmd = mlscurv();
         cmd.arg("curvature").arg(&input).arg("-o").arg(&out);
-        cmd.args(["--normals", "file", "--h", &h.to_string(), "--quiet"]);
+        cmd.args([
+            "--method",
+            "paper",
+            "--normals",
+            "file",
+            "--h",
+            &h.to_string(),
+            "--quiet",
+        ]);
         if adaptive {
             cmd.arg("--adaptive");
         }

@@ -37,7 +37,15 @@ fn chunked_rows_match_the_library_on_the_whole_cloud() {
             .arg(&input)
             .arg("-o")
             .arg(&out)
-            .args(["--normals", "file", "--h", &H.to_string(), "--quiet"]),
+            .args([
+                "--method",
+                "paper",
+                "--normals",
+                "file",
+                "--h",
+                &H.to_string(),
+                "--quiet",
+            ]),
     );
     let table = Table::parse_csv(&std::fs::read_to_string(&out).unwrap());
     assert_eq!(table.header.join(","), CURVATURE_HEADER);

@@ -10,6 +10,9 @@ use nalgebra::Vector3;
 
 /// The columns `curvature` writes, in order.
 pub const CURVATURE_HEADER: &str = "x,y,z,nx,ny,nz,k1,k2,mean,gauss,d1x,d1y,d1z,d2x,d2y,d2z,status";
+/// The columns of `mlscurv curvature` with the default jet method.
+pub const JET_HEADER: &str =
+    "x,y,z,nx,ny,nz,k1,k2,mean,gauss,d1x,d1y,d1z,d2x,d2y,d2z,k1_sd,k2_sd,status";
 
 /// The columns `eval` writes, in order.
 pub const EVAL_HEADER: &str =

@@ -7,7 +7,7 @@ use mls_io::PointCloud;
 use nalgebra::Vector3;
 
 use crate::common::{
-    BUNNY_POINTS, CURVATURE_HEADER, Table, bunny_path, median, mlscurv, outward_fraction, run_ok,
+    BUNNY_POINTS, JET_HEADER, Table, bunny_path, median, mlscurv, outward_fraction, run_ok,
 };
 
 /// The bunny is not star-shaped about its centroid (the ears lean back over the body, the
@@ -63,7 +63,7 @@ static BUNNY: LazyLock<BunnyCurvature> = LazyLock::new(|| {
 #[test]
 fn csv_has_the_documented_header_and_one_row_per_input_point_in_input_order() {
     let b = &*BUNNY;
-    assert_eq!(b.csv_text.lines().next(), Some(CURVATURE_HEADER));
+    assert_eq!(b.csv_text.lines().next(), Some(JET_HEADER));
     assert_eq!(b.input.points.len(), BUNNY_POINTS);
     assert_eq!(b.table.rows.len(), BUNNY_POINTS);
     // Evaluated at the input points, so x y z are the input coordinates exactly.

@@ -108,6 +108,8 @@ fn sphere_curvature_at_projected_points_has_the_predicted_smoothing_bias() {
         &p,
         Some(&n),
         &[
+            "--method",
+            "paper",
             "--normals",
             "file",
             "--at",

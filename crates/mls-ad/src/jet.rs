@@ -1,0 +1,296 @@
+//! The jet estimator's witness: the same definition (`mls_core::jet`'s documentation) computed
+//! by another route. Its own support (a brute-force distance filter over every sample), its
+//! own tangent basis, a dense weighted design matrix solved by SVD instead of normal
+//! equations and Cholesky, and the curvature of the fitted surface `F = w − P(u, v)` by
+//! hyper-dual differentiation and a 3 × 3 eigen-decomposition.
+
+use mls_core::Sample;
+use nalgebra::{DMatrix, DVector, Matrix3, SVector, Vector3};
+use num_dual::{DualNum, hessian};
+
+use crate::witness_curvature;
+
+/// What the witness finds at one query.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct JetWitness {
+    /// Principal curvatures at the foot point.
+    pub k1: f64,
+    /// Smaller principal curvature.
+    pub k2: f64,
+    /// Predicted standard deviations of k1 and k2 (noise part).
+    pub sd: [f64; 2],
+    /// Degree fitted.
+    pub degree: usize,
+    /// Support radius chosen.
+    pub radius: f64,
+    /// Foot point.
+    pub foot: Vector3<f64>,
+}
+
+/// The exponents of the degree-`d` basis, by total degree then by the power of v.
+fn exponents(degree: usize) -> Vec<(i32, i32)> {
+    let mut out = Vec::new();
+    for d in 0..=degree as i32 {
+        for j in 0..=d {
+            out.push((d - j, j));
+        }
+    }
+    out
+}
+
+/// One fit: `(coefficients in scaled units with their exponents, σ̂_h, covariance of
+/// (c20, c11, c02))`, or `None` when the weighted design does not determine the degree.
+#[allow(clippy::type_complexity)]
+fn fit_once(
+    rows: &[(f64, f64, f64, Vector3<f64>, f64)],
+    degree: usize,
+    slopes: bool,
+) -> Option<(Vec<f64>, Vec<(i32, i32)>, f64, Matrix3<f64>)> {
+    let ex = exponents(degree);
+    let m = ex.len();
+    // Rows: every height, then (if used) two slope rows per sample with a usable normal.
+    let mut a_h = Vec::new();
+    let mut a_s = Vec::new();
+    for &(u, v, z, nu, w) in rows {
+        a_h.push((
+            ex.iter()
+                .map(|&(i, j)| u.powi(i) * v.powi(j))
+                .collect::<Vec<_>>(),
+            z,
+            w,
+        ));
+        if slopes && nu.z > 0.5 {
+            let du = ex
+                .iter()
+                .map(|&(i, j)| {
+                    if i > 0 {
+                        f64::from(i) * u.powi(i - 1) * v.powi(j)
+                    } else {
+                        0.0
+                    }
+                })
+                .collect();
+            let dv = ex
+                .iter()
+                .map(|&(i, j)| {
+                    if j > 0 {
+                        f64::from(j) * u.powi(i) * v.powi(j - 1)
+                    } else {
+                        0.0
+                    }
+                })
+                .collect();
+            a_s.push((du, -nu.x / nu.z, w));
+            a_s.push((dv, -nu.y / nu.z, w));
+        }
+    }
+    let gram = |rows: &[(Vec<f64>, f64, f64)], power: i32| {
+        let mut g = DMatrix::<f64>::zeros(m, m);
+        for (phi, _, w) in rows {
+            let p = DVector::from_column_slice(phi);
+            g += &p * p.transpose() * w.powi(power);
+        }
+        g
+    };
+    let (h2, s1, s2) = (gram(&a_h, 2), gram(&a_s, 1), gram(&a_s, 2));
+    let h1 = gram(&a_h, 1);
+    let wsum_h: f64 = a_h.iter().map(|r| r.2).sum();
+    let wsum_s: f64 = a_s.iter().map(|r| r.2).sum();
+    let use_slopes = slopes && wsum_s > 0.0;
+    let mut lambda = if use_slopes { 1.0 } else { 0.0 };
+    let mut out = None;
+    for _ in 0..if use_slopes { 2 } else { 1 } {
+        // √ω-scaled dense system, solved by SVD.
+        let n_rows = a_h.len() + a_s.len();
+        let mut a = DMatrix::<f64>::zeros(n_rows, m);
+        let mut b = DVector::<f64>::zeros(n_rows);
+        for (r, (phi, y, w)) in a_h
+            .iter()
+            .map(|(p, y, w)| (p, y, *w))
+            .chain(a_s.iter().map(|(p, y, w)| (p, y, w * lambda)))
+            .enumerate()
+        {
+            let sw = w.sqrt();
+            for c in 0..m {
+                a[(r, c)] = phi[c] * sw;
+            }
+            b[r] = y * sw;
+        }
+        let svd = a.clone().svd(true, true);
+        let smax = svd.singular_values.max();
+        // Singular values squared are the eigenvalues of M: the same 1e-10 floor relative to
+        // M's scale as the closed form's pivot test, up to the diagonal/eigenvalue difference.
+        let diag_max = (0..m)
+            .map(|i| (h1.clone() + &s1 * lambda)[(i, i)])
+            .fold(0.0f64, f64::max);
+        if svd.singular_values.min().powi(2) < 1e-10 * diag_max || smax == 0.0 {
+            return None;
+        }
+        let c = svd.solve(&b, 0.0).ok()?;
+        let mm = a.transpose() * &a;
+        let inv = mm.try_inverse()?;
+        let (mut rss_h, mut rss_s) = (0.0, 0.0);
+        for (phi, y, w) in &a_h {
+            let p: f64 = phi.iter().zip(c.iter()).map(|(x, c)| x * c).sum();
+            rss_h += w * (y - p) * (y - p);
+        }
+        for (phi, y, w) in &a_s {
+            let p: f64 = phi.iter().zip(c.iter()).map(|(x, c)| x * c).sum();
+            rss_s += w * (y - p) * (y - p);
+        }
+        let dof_h = wsum_h - (&inv * &h2).trace();
+        let dof_s = wsum_s - lambda * (&inv * &s2).trace();
+        if !(dof_h > 0.0) {
+            return None;
+        }
+        let var_h = rss_h / dof_h;
+        let var_s = if use_slopes && dof_s > 0.0 {
+            rss_s / dof_s
+        } else {
+            0.0
+        };
+        let cov_full = &inv * (&h2 * var_h + &s2 * (lambda * lambda * var_s)) * &inv;
+        let cov = Matrix3::from_fn(|i, j| cov_full[(3 + i, 3 + j)]);
+        out = Some((c.iter().copied().collect(), ex.clone(), var_h.sqrt(), cov));
+        if use_slopes {
+            lambda = if var_s > 0.0 {
+                (var_h / var_s).clamp(1e-4, 1e4)
+            } else {
+                1e4
+            };
+        }
+    }
+    out
+}
+
+/// The fitted height polynomial `ρ p(u/ρ, v/ρ)` at dual `(u, v)`.
+fn height<D: DualNum<Primitive = f64> + Copy>(
+    u: D,
+    v: D,
+    c: &[f64],
+    ex: &[(i32, i32)],
+    rho: f64,
+) -> D {
+    let (su, sv) = (u * (1.0 / rho), v * (1.0 / rho));
+    ex.iter()
+        .zip(c)
+        .map(|(&(i, j), &c)| su.powi(i) * sv.powi(j) * c)
+        .fold(D::from(0.0), |a, b| a + b)
+        * rho
+}
+
+/// `F(y) = w − P(u, v)` with `(u, v, w)` the coordinates of `y − x` in the frame.
+fn fitted<D: DualNum<Primitive = f64> + Copy>(
+    y: &SVector<D, 3>,
+    x: &Vector3<f64>,
+    frame: &(Vector3<f64>, Vector3<f64>, Vector3<f64>),
+    c: &[f64],
+    ex: &[(i32, i32)],
+    rho: f64,
+) -> D {
+    let d = y - x.map(D::from);
+    let (u, v, w) = (
+        d.dot(&frame.0.map(D::from)),
+        d.dot(&frame.1.map(D::from)),
+        d.dot(&frame.2.map(D::from)),
+    );
+    w - height(u, v, c, ex, rho)
+}
+
+/// The witness of `Evaluator::jet_at` at `x`, from all `samples` of the cloud.
+pub fn jet_witness(
+    x: &Vector3<f64>,
+    samples: &[Sample],
+    h: f64,
+    config: &mls_core::JetConfig,
+) -> Option<JetWitness> {
+    let slopes = config.normals == mls_core::NormalData::Slopes;
+    let mut frame: Option<(Vector3<f64>, Vector3<f64>, Vector3<f64>)> = None;
+    let mut best: Option<JetWitness> = None;
+    let (mut lo, mut hi) = ([f64::NEG_INFINITY; 2], [f64::INFINITY; 2]);
+    for j in 0..config.scales.max(1) {
+        let rho = config.radius * h * 2f64.sqrt().powi(j as i32);
+        let near: Vec<(Vector3<f64>, Vector3<f64>, f64)> = samples
+            .iter()
+            .filter_map(|s| {
+                let d = s.point.coords - x;
+                let t = 1.0 - d.norm_squared() / (rho * rho);
+                (t > 0.0).then(|| (d, s.normal, t * t * t))
+            })
+            .collect();
+        if near.len() < 6 {
+            continue;
+        }
+        let (t1, t2, n) = *frame.get_or_insert_with(|| {
+            let sum: Vector3<f64> = near.iter().map(|(_, nu, w)| nu * *w).sum();
+            let n = sum.normalize();
+            // Our own tangent basis (any will do: the fit is rotation-invariant in (u, v)).
+            let a = if n.z.abs() < 0.8 {
+                Vector3::z()
+            } else {
+                Vector3::x()
+            };
+            let t1 = a.cross(&n).normalize();
+            (t1, n.cross(&t1), n)
+        });
+        // Samples facing away from the frame belong to another sheet.
+        let near: Vec<_> = near
+            .into_iter()
+            .filter(|(_, nu, _)| nu.dot(&n) > 0.0)
+            .collect();
+        let rows: Vec<_> = near
+            .iter()
+            .map(|(d, nu, w)| {
+                (
+                    d.dot(&t1) / rho,
+                    d.dot(&t2) / rho,
+                    d.dot(&n) / rho,
+                    Vector3::new(nu.dot(&t1), nu.dot(&t2), nu.dot(&n)),
+                    *w,
+                )
+            })
+            .collect();
+        let solution = (2..=config.degree.clamp(2, 4))
+            .rev()
+            .filter(|&d| near.len() as f64 >= 1.5 * ((d + 1) * (d + 2) / 2) as f64)
+            .find_map(|d| fit_once(&rows, d, slopes).map(|f| (d, f)));
+        let Some((degree, (c, ex, _, cov))) = solution else {
+            if best.is_some() {
+                break;
+            }
+            continue;
+        };
+        let a00 = c[0] * rho;
+        let foot = x + n * a00;
+        let (_, grad, hess) = hessian(|y| fitted(&y, x, &(t1, t2, n), &c, &ex, rho), &foot);
+        let wc = witness_curvature(&grad, &hess);
+        let sd = [wc.d1, wc.d2].map(|d| {
+            let (cs, sn) = (d.dot(&t1), d.dot(&t2));
+            let g = Vector3::new(cs * cs, cs * sn, sn * sn) * (2.0 / grad.norm());
+            (g.dot(&(cov / (rho * rho) * g)))
+                .max(0.0)
+                .sqrt()
+                .max(1e-8 / rho)
+        });
+        let here = JetWitness {
+            k1: wc.k1,
+            k2: wc.k2,
+            sd,
+            degree,
+            radius: rho,
+            foot,
+        };
+        let k = [here.k1, here.k2];
+        let mut agree = true;
+        for i in 0..2 {
+            lo[i] = lo[i].max(k[i] - config.confidence * sd[i]);
+            hi[i] = hi[i].min(k[i] + config.confidence * sd[i]);
+            agree &= lo[i] <= hi[i];
+        }
+        if !agree && best.is_some() {
+            break;
+        }
+        best = Some(here);
+    }
+    best
+}
