@@ -108,7 +108,8 @@ struct SurfaceArgs {
     #[arg(long, value_enum, default_value_t = NormalsMode::Auto)]
     normals: NormalsMode,
     /// Orientation of estimated normals: `mst` (outward, by minimum spanning tree),
-    /// `viewpoint:X,Y,Z` (towards a scanner position), or `none`.
+    /// `viewpoint:X,Y,Z` (towards a scanner position), `up` (positive z, for airborne scans),
+    /// or `none`. `viewpoint` and `up` decide each smooth patch by a vote of its points.
     #[arg(long, value_parser = parse_orient, default_value = "mst")]
     orient: mls_core::normals::Orientation,
     #[command(flatten)]
@@ -171,7 +172,7 @@ struct NormalsArgs {
     out: OutputArgs,
     #[command(flatten)]
     scale: ScaleArgs,
-    /// Orientation: `mst`, `viewpoint:X,Y,Z`, or `none`.
+    /// Orientation: `mst`, `viewpoint:X,Y,Z`, `up`, or `none`.
     #[arg(long, value_parser = parse_orient, default_value = "mst")]
     orient: mls_core::normals::Orientation,
     #[command(flatten)]
@@ -225,10 +226,11 @@ fn parse_orient(s: &str) -> Result<mls_core::normals::Orientation, String> {
     match s {
         "mst" => Ok(Orientation::Outward),
         "none" => Ok(Orientation::None),
+        "up" => Ok(Orientation::Up),
         _ => {
             let Some(rest) = s.strip_prefix("viewpoint:") else {
                 return Err(format!(
-                    "expected `mst`, `none` or `viewpoint:X,Y,Z`, got `{s}`"
+                    "expected `mst`, `up`, `none` or `viewpoint:X,Y,Z`, got `{s}`"
                 ));
             };
             let v: Vec<f64> = rest
