@@ -112,9 +112,16 @@ struct SurfaceArgs {
     /// or `none`. `viewpoint` and `up` decide each smooth patch by a vote of its points.
     #[arg(long, value_parser = parse_orient, default_value = "mst")]
     orient: mls_core::normals::Orientation,
+    #[arg(long, value_parser = mls_io::ColumnNames::parse, help = COLUMNS_HELP)]
+    columns: Option<mls_io::ColumnNames>,
     #[command(flatten)]
     run: RunArgs,
 }
+
+const COLUMNS_HELP: &str = "Names of the columns of a text input (.xyz/.txt/.pts, or .csv \
+    instead of its header), e.g. `x,y,z,nx,ny,nz,intensity`: x, y, z and nx, ny, nz are read, \
+    other names skipped. Without it, columns 4-6 of a headerless file are normals only if they \
+    are unit vectors on every row";
 
 #[derive(Debug, Args)]
 struct OutputArgs {
@@ -150,6 +157,9 @@ struct EvalArgs {
     /// The cloud defining the surface; it must carry normals.
     #[arg(long)]
     cloud: PathBuf,
+    /// Names of the columns of the cloud, when it is a text file (see `curvature --help`).
+    #[arg(long, value_parser = mls_io::ColumnNames::parse)]
+    columns: Option<mls_io::ColumnNames>,
     /// The query points (any supported format; normals in it are ignored).
     #[arg(long = "at")]
     queries: PathBuf,
@@ -175,6 +185,8 @@ struct NormalsArgs {
     /// Orientation: `mst`, `viewpoint:X,Y,Z`, `up`, or `none`.
     #[arg(long, value_parser = parse_orient, default_value = "mst")]
     orient: mls_core::normals::Orientation,
+    #[arg(long, value_parser = mls_io::ColumnNames::parse, help = COLUMNS_HELP)]
+    columns: Option<mls_io::ColumnNames>,
     #[command(flatten)]
     run: RunArgs,
 }
@@ -193,6 +205,8 @@ struct ProjectArgs {
 struct InfoArgs {
     /// Input point cloud.
     input: PathBuf,
+    #[arg(long, value_parser = mls_io::ColumnNames::parse, help = COLUMNS_HELP)]
+    columns: Option<mls_io::ColumnNames>,
 }
 
 fn positive_finite(s: &str) -> Result<f64, String> {

@@ -33,9 +33,22 @@ impl Timings {
     }
 }
 
-/// Reads a cloud and checks it has enough points.
-pub fn read(path: &Path) -> Result<PointCloud> {
-    let cloud = mls_io::read_point_cloud(path)?;
+/// Reads a cloud (with the column names of `--columns`, if given) and prints the reader's
+/// notes on stderr, even with `--quiet`: they say how the columns were understood.
+pub fn read_noted(path: &Path, columns: Option<&mls_io::ColumnNames>) -> Result<PointCloud> {
+    let options = mls_io::ReadOptions {
+        columns: columns.cloned(),
+    };
+    let mls_io::ReadOutcome { cloud, notes } = mls_io::read_point_cloud_with(path, &options)?;
+    for note in notes {
+        eprintln!("mlscurv: note: {note}");
+    }
+    Ok(cloud)
+}
+
+/// Reads a cloud as [`read_noted`] does and checks it has enough points.
+pub fn read(path: &Path, columns: Option<&mls_io::ColumnNames>) -> Result<PointCloud> {
+    let cloud = read_noted(path, columns)?;
     if cloud.points.len() < MIN_POINTS {
         bail!(
             "{}: {} point(s); at least {MIN_POINTS} are needed to build a neighbourhood",
@@ -248,7 +261,7 @@ pub fn prepare<S>(
     let PointCloud {
         points,
         normals: file_normals,
-    } = t.time("read", || read(input))?;
+    } = t.time("read", || read(input, s.columns.as_ref()))?;
     // `[f64; 3]` and `Point` have the same layout: the conversion reuses the buffer.
     let points: Vec<Point> = points.into_iter().map(Point::from).collect();
     let scale = t.time("spacing", || {
