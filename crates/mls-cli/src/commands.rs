@@ -300,7 +300,7 @@ fn print_timings(t: &Timings, n: usize) {
 }
 
 pub fn eval(a: EvalArgs) -> Result<()> {
-    let cloud = pipeline::read(&a.cloud)?;
+    let cloud = pipeline::read(&a.cloud, a.columns.as_ref())?;
     let Some(file_normals) = &cloud.normals else {
         anyhow::bail!(
             "{}: the cloud has no normals (nx, ny, nz); eval needs an oriented cloud",
@@ -409,7 +409,7 @@ pub fn normals(a: NormalsArgs) -> Result<()> {
     pipeline::with_threads(a.run.threads, || {
         let mut t = Timings::default();
         let par = Parallelism::Rayon;
-        let cloud = t.time("read", || pipeline::read(&a.input))?;
+        let cloud = t.time("read", || pipeline::read(&a.input, a.columns.as_ref()))?;
         let points = pipeline::to_points(&cloud);
         let scale = t.time("spacing", || {
             pipeline::choose_h(&points, a.scale.h, a.scale.h_factor, par, &a.input)
@@ -532,7 +532,7 @@ fn dist(a: &[f64; 3], b: &[f64; 3]) -> f64 {
 }
 
 pub fn info(a: InfoArgs) -> Result<()> {
-    let cloud = mls_io::read_point_cloud(&a.input)?;
+    let cloud = pipeline::read_noted(&a.input, a.columns.as_ref())?;
     let points = pipeline::to_points(&cloud);
     println!("file            {}", a.input.display());
     println!("points          {}", points.len());

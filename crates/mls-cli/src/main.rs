@@ -120,12 +120,20 @@ struct SurfaceArgs {
     #[arg(long, value_enum, default_value_t = NormalsMode::Auto)]
     normals: NormalsMode,
     /// Orientation of estimated normals: `mst` (outward, by minimum spanning tree),
-    /// `viewpoint:X,Y,Z` (towards a scanner position), or `none`.
+    /// `viewpoint:X,Y,Z` (towards a scanner position), `up` (positive z, for airborne scans),
+    /// or `none`. `viewpoint` and `up` decide each smooth patch by a vote of its points.
     #[arg(long, value_parser = parse_orient, default_value = "mst")]
     orient: mls_core::normals::Orientation,
+    #[arg(long, value_parser = mls_io::ColumnNames::parse, help = COLUMNS_HELP)]
+    columns: Option<mls_io::ColumnNames>,
     #[command(flatten)]
     run: RunArgs,
 }
+
+const COLUMNS_HELP: &str = "Names of the columns of a text input (.xyz/.txt/.pts, or .csv \
+    instead of its header), e.g. `x,y,z,nx,ny,nz,intensity`: x, y, z and nx, ny, nz are read, \
+    other names skipped. Without it, columns 4-6 of a headerless file are normals only if they \
+    are unit vectors on every row";
 
 #[derive(Debug, Args)]
 struct OutputArgs {
@@ -166,6 +174,9 @@ struct EvalArgs {
     /// The cloud defining the surface; it must carry normals.
     #[arg(long)]
     cloud: PathBuf,
+    /// Names of the columns of the cloud, when it is a text file (see `curvature --help`).
+    #[arg(long, value_parser = mls_io::ColumnNames::parse)]
+    columns: Option<mls_io::ColumnNames>,
     /// The query points (any supported format; normals in it are ignored).
     #[arg(long = "at")]
     queries: PathBuf,
@@ -188,9 +199,11 @@ struct NormalsArgs {
     out: OutputArgs,
     #[command(flatten)]
     scale: ScaleArgs,
-    /// Orientation: `mst`, `viewpoint:X,Y,Z`, or `none`.
+    /// Orientation: `mst`, `viewpoint:X,Y,Z`, `up`, or `none`.
     #[arg(long, value_parser = parse_orient, default_value = "mst")]
     orient: mls_core::normals::Orientation,
+    #[arg(long, value_parser = mls_io::ColumnNames::parse, help = COLUMNS_HELP)]
+    columns: Option<mls_io::ColumnNames>,
     #[command(flatten)]
     run: RunArgs,
 }
@@ -209,6 +222,8 @@ struct ProjectArgs {
 struct InfoArgs {
     /// Input point cloud.
     input: PathBuf,
+    #[arg(long, value_parser = mls_io::ColumnNames::parse, help = COLUMNS_HELP)]
+    columns: Option<mls_io::ColumnNames>,
 }
 
 fn positive_finite(s: &str) -> Result<f64, String> {
@@ -242,10 +257,11 @@ fn parse_orient(s: &str) -> Result<mls_core::normals::Orientation, String> {
     match s {
         "mst" => Ok(Orientation::Outward),
         "none" => Ok(Orientation::None),
+        "up" => Ok(Orientation::Up),
         _ => {
             let Some(rest) = s.strip_prefix("viewpoint:") else {
                 return Err(format!(
-                    "expected `mst`, `none` or `viewpoint:X,Y,Z`, got `{s}`"
+                    "expected `mst`, `up`, `none` or `viewpoint:X,Y,Z`, got `{s}`"
                 ));
             };
             let v: Vec<f64> = rest

@@ -33,9 +33,22 @@ impl Timings {
     }
 }
 
-/// Reads a cloud and checks it has enough points.
-pub fn read(path: &Path) -> Result<PointCloud> {
-    let cloud = mls_io::read_point_cloud(path)?;
+/// Reads a cloud (with the column names of `--columns`, if given) and prints the reader's
+/// notes on stderr, even with `--quiet`: they say how the columns were understood.
+pub fn read_noted(path: &Path, columns: Option<&mls_io::ColumnNames>) -> Result<PointCloud> {
+    let options = mls_io::ReadOptions {
+        columns: columns.cloned(),
+    };
+    let mls_io::ReadOutcome { cloud, notes } = mls_io::read_point_cloud_with(path, &options)?;
+    for note in notes {
+        eprintln!("mlscurv: note: {note}");
+    }
+    Ok(cloud)
+}
+
+/// Reads a cloud as [`read_noted`] does and checks it has enough points.
+pub fn read(path: &Path, columns: Option<&mls_io::ColumnNames>) -> Result<PointCloud> {
+    let cloud = read_noted(path, columns)?;
     if cloud.points.len() < MIN_POINTS {
         bail!(
             "{}: {} point(s); at least {MIN_POINTS} are needed to build a neighbourhood",
@@ -156,20 +169,49 @@ pub fn normals(
         .with_context(|| format!("{}: normal estimation", file.display()))?;
     let orient = match orientation {
         Orientation::Outward => "oriented outward by minimum spanning tree".to_string(),
-        Orientation::Viewpoint(v) => {
-            format!("oriented towards the viewpoint ({}, {}, {})", v.x, v.y, v.z)
+        Orientation::Viewpoint(v) => format!(
+            "oriented towards the viewpoint ({}, {}, {}) by minimum spanning tree and a vote per smooth patch",
+            v.x, v.y, v.z
+        ),
+        Orientation::Up => {
+            "oriented up (+z) by minimum spanning tree and a vote per smooth patch".to_string()
         }
         Orientation::None => "not oriented (--orient none)".to_string(),
     };
-    let consistency = est
-        .report
-        .consistency
-        .map(|c| format!(", {:.2}% of neighbour pairs agree", 100.0 * c))
-        .unwrap_or_default();
+    let r = &est.report;
+    let mut checks = Vec::new();
+    if let Some(f) = r.facing {
+        let towards = match orientation {
+            Orientation::Up => "point up",
+            _ => "face the viewpoint",
+        };
+        if let Some(share) = f.share() {
+            checks.push(format!("{:.2}% of normals {towards}", 100.0 * share));
+        }
+        if let Some(share) = f.decisive_share() {
+            checks.push(format!(
+                "{:.2}% of the {} within 60° of the line of sight",
+                100.0 * share,
+                f.decisive
+            ));
+        }
+    }
+    if let Some(c) = r.consistency {
+        checks.push(format!("{:.2}% of neighbour pairs agree", 100.0 * c));
+    }
+    let pieces = if r.patches > r.components {
+        format!("{} component(s) in {} patches", r.components, r.patches)
+    } else {
+        format!("{} component(s)", r.components)
+    };
+    let checks = if checks.is_empty() {
+        String::new()
+    } else {
+        format!(", {}", checks.join(", "))
+    };
     let source = format!(
-        "estimated (weighted covariance, {} neighbours), {orient}: {} component(s){consistency}; {} failed",
+        "estimated (weighted covariance, {} neighbours), {orient}: {pieces}{checks}; {} failed",
         DEFAULT_NEIGHBOURS,
-        est.report.components,
         est.failed()
     );
     Ok(Normals {
@@ -228,7 +270,7 @@ pub fn prepare<S>(
     let PointCloud {
         points,
         normals: file_normals,
-    } = t.time("read", || read(input))?;
+    } = t.time("read", || read(input, s.columns.as_ref()))?;
     // `[f64; 3]` and `Point` have the same layout: the conversion reuses the buffer.
     let points: Vec<Point> = points.into_iter().map(Point::from).collect();
     let scale = t.time("spacing", || {

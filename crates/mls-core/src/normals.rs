@@ -11,7 +11,8 @@
 //!    covariance of each neighbourhood (Sec. 4.1, with the centroid normalised: erratum
 //!    E-normal, see [`normal_from_neighbourhood`]).
 //! 4. [`orient_normals`]: a consistent sign for the normals along a minimum spanning tree of
-//!    the neighbour graph (Hoppe et al. 1992), seeded per connected component.
+//!    the neighbour graph (Hoppe et al. 1992), one sign per connected component chosen by the
+//!    [`Orientation`] rule (outward, or a vote of the points towards a viewpoint or upwards).
 //!
 //! [`estimate_normals`] runs all four. A point whose normal cannot be estimated (too few or
 //! collinear neighbours) gets [`PointStatus::NormalEstimationFailed`] and takes no part in the
@@ -27,7 +28,7 @@ pub use estimate::{
     DEFAULT_DEGENERACY_TOLERANCE, NormalEstimate, estimate_unoriented, normal_from_neighbourhood,
 };
 pub use graph::NeighbourGraph;
-pub use orient::{Orientation, OrientationReport, orient_normals, orientation_consistency};
+pub use orient::{Facing, Orientation, OrientationReport, orient_normals, orientation_consistency};
 pub use spacing::{
     DEFAULT_H_FACTOR, DEFAULT_SPACING_NEIGHBOURS, DistanceStats, SpacingStats, spacing_statistics,
     square_grid_rms_distance, suggest_h,

@@ -68,10 +68,9 @@ pub enum ReadError {
         /// The missing components with a verb, e.g. `"nz is"` or `"ny and nz are"`.
         missing: String,
     },
-    /// The first data row of an XYZ/TXT/PTS file has a column count other than 3 (points)
-    /// or 6 (points and normals).
+    /// The first data row of an XYZ/TXT/PTS file has fewer than 3 columns.
     #[error(
-        "{file}: line {line}: {found} columns; expected 3 (x y z) or 6 (x y z nx ny nz), \
+        "{file}: line {line}: {found} column(s); expected at least 3 (x y z ...), \
          whitespace-separated"
     )]
     UnsupportedColumnCount {
@@ -81,6 +80,29 @@ pub enum ReadError {
         line: usize,
         /// Its number of columns.
         found: usize,
+    },
+    /// The column names given in [`ReadOptions::columns`](crate::ReadOptions::columns)
+    /// (`--columns`) are not as many as the columns of the first data row (XYZ) or the
+    /// header (CSV).
+    #[error("{file}: line {line}: {found} columns, but --columns names {named}")]
+    ColumnsMismatch {
+        /// The file.
+        file: String,
+        /// The first data row or the header.
+        line: usize,
+        /// Its number of columns.
+        found: usize,
+        /// The names given.
+        named: String,
+    },
+    /// Column names were given for a PLY file, whose header names its properties.
+    #[error(
+        "{file}: --columns applies to text files (.xyz, .txt, .pts, .csv); a PLY header names \
+         its properties"
+    )]
+    ColumnsForPly {
+        /// The file.
+        file: String,
     },
     /// A row has a different number of columns from the first data row (XYZ) or the header
     /// (CSV).

@@ -2,7 +2,10 @@
 //! order), whitespace-separated XYZ/TXT/PTS, and CSV with a header.
 //!
 //! Readers return a [`PointCloud`] of points and, when the file has all of `nx`, `ny`, `nz`,
-//! normals exactly as stored (not normalised: the caller validates them). Every coordinate and
+//! normals exactly as stored (not normalised: the caller validates them). A headerless text
+//! file has no names, so its columns 4–6 are taken as normals only when they are unit vectors
+//! on every row ([`read_xyz_with`]); [`ColumnNames`] (`--columns`) names the columns instead,
+//! and the `_with` readers return notes on the columns ignored or not taken as normals. Every coordinate and
 //! normal component must be finite. Errors ([`ReadError`]) are one line starting with the file
 //! name and say where: the line and field for text, the byte offset and property for binary
 //! PLY. An empty cloud is not an error; the caller decides.
@@ -26,6 +29,7 @@
 
 #![warn(missing_docs)]
 
+mod columns;
 mod error;
 mod lines;
 mod ply;
@@ -36,8 +40,9 @@ use std::fs::File;
 use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
 
+pub use columns::{ColumnNames, ReadOptions, UNIT_TOLERANCE};
 pub use error::{ReadError, WriteError};
-pub use text::{read_csv, read_xyz};
+pub use text::{read_csv, read_csv_with, read_xyz, read_xyz_with};
 pub use write::{
     Axis, Column, ColumnData, PlyFormat, write_csv, write_csv_to, write_ply, write_ply_to,
     write_point_cloud, write_xyz, write_xyz_to,
@@ -90,6 +95,17 @@ impl PointCloud {
     }
 }
 
+/// A cloud and what the reader noticed on the way: one line per note, starting with the file
+/// name, about columns it ignored or did not take as normals. Not errors: the cloud is
+/// usable, but a caller should show them.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ReadOutcome {
+    /// The cloud read.
+    pub cloud: PointCloud,
+    /// The notes, in the order found.
+    pub notes: Vec<String>,
+}
+
 /// A file format, as named by a file extension.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum FileFormat {
@@ -126,17 +142,31 @@ fn detect_format(path: &Path) -> Result<FileFormat, Option<String>> {
 
 /// Reads a point cloud, choosing the reader by the file's extension (case-insensitive):
 /// `.ply` ([`read_ply`]), `.xyz`, `.txt`, `.pts` ([`read_xyz`]) or `.csv` ([`read_csv`]).
+/// The readers' notes are dropped; [`read_point_cloud_with`] returns them.
 ///
 /// # Errors
 /// [`ReadError::NoExtension`] or [`ReadError::UnknownExtension`] before the file is opened,
 /// [`ReadError::Io`] if it cannot be opened or read, and those of the reader.
 pub fn read_point_cloud(path: &Path) -> Result<PointCloud, ReadError> {
+    read_point_cloud_with(path, &ReadOptions::default()).map(|r| r.cloud)
+}
+
+/// Reads a point cloud as [`read_point_cloud`] does, with options, and returns the readers'
+/// notes beside it ([`read_xyz_with`], [`read_csv_with`]).
+///
+/// # Errors
+/// Those of [`read_point_cloud`], and [`ReadError::ColumnsForPly`] when column names are
+/// given for a PLY file.
+pub fn read_point_cloud_with(path: &Path, options: &ReadOptions) -> Result<ReadOutcome, ReadError> {
     let file = path.display().to_string();
     let format = match detect_format(path) {
         Ok(format) => format,
         Err(None) => return Err(ReadError::NoExtension { file }),
         Err(Some(extension)) => return Err(ReadError::UnknownExtension { file, extension }),
     };
+    if format == FileFormat::Ply && options.columns.is_some() {
+        return Err(ReadError::ColumnsForPly { file });
+    }
     let opened = File::open(path).map_err(|error| ReadError::Io {
         file: file.clone(),
         error,
@@ -144,9 +174,12 @@ pub fn read_point_cloud(path: &Path) -> Result<PointCloud, ReadError> {
     let size = opened.metadata().ok().map(|m| m.len());
     let reader = BufReader::with_capacity(1 << 20, opened);
     match format {
-        FileFormat::Ply => ply::read(reader, &file, size),
-        FileFormat::Xyz => read_xyz(reader, &file),
-        FileFormat::Csv => read_csv(reader, &file),
+        FileFormat::Ply => ply::read(reader, &file, size).map(|cloud| ReadOutcome {
+            cloud,
+            notes: Vec::new(),
+        }),
+        FileFormat::Xyz => read_xyz_with(reader, &file, options),
+        FileFormat::Csv => read_csv_with(reader, &file, options),
     }
 }
 

@@ -3,87 +3,244 @@
 use std::borrow::Cow;
 use std::io::BufRead;
 
+use crate::columns::{ReadOptions, UNIT_TOLERANCE};
 use crate::error::{ReadError, quoted};
 use crate::lines::{Lines, parse_finite};
 use crate::ply::check_normals;
-use crate::{CloudBuilder, PointCloud, SLOT_NAMES};
+use crate::{CloudBuilder, PointCloud, ReadOutcome, SLOT_NAMES};
 
-/// Reads whitespace-separated rows of `x y z` or `x y z nx ny nz`.
-///
-/// Blank lines and lines whose first non-blank character is `#` are ignored. The first data
-/// row fixes the column count, which must be 3 (points) or 6 (points and normals); every later
-/// row must have as many. Other counts are rejected rather than guessed at: scanner exports
-/// such as `x y z intensity r g b` would otherwise be read with colours as normals. A first
-/// data row holding a single non-negative integer is the point-count line some scanners write
-/// at the top of `.pts` files, and is skipped in every extension since a one-column row is
-/// never valid data. `name` is the display name used in errors.
+/// Reads whitespace-separated rows of `x y z`, optionally followed by normals and other
+/// columns, with the default options; see [`read_xyz_with`]. What the reader noticed (columns
+/// ignored, columns 4–6 not taken as normals) is dropped: use [`read_xyz_with`] to show it.
 ///
 /// # Errors
-/// [`ReadError::UnsupportedColumnCount`], [`ReadError::ColumnCount`], [`ReadError::Ascii`]
-/// for a value that is not a finite number or for text that is not UTF-8, and
-/// [`ReadError::Io`].
+/// As [`read_xyz_with`].
 pub fn read_xyz(reader: impl BufRead, name: &str) -> Result<PointCloud, ReadError> {
+    read_xyz_with(reader, name, &ReadOptions::default()).map(|r| r.cloud)
+}
+
+/// What a column of a headerless text file is read as.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Role {
+    /// A slot of [`SLOT_NAMES`], parsed strictly.
+    Slot(usize),
+    /// Component `k` of the candidate normals (columns 4–6 without `--columns`).
+    Candidate(usize),
+    /// Skipped, not parsed.
+    Skip,
+}
+
+/// Whether columns 4–6 of a headerless file hold unit vectors on every row so far.
+#[derive(Debug, Default)]
+struct UnitCheck {
+    normals: Vec<[f64; 3]>,
+    /// Why they are not normals: the first row that is not a unit vector, and what it holds.
+    failed: Option<(usize, String)>,
+    any_unit: bool,
+}
+
+impl UnitCheck {
+    fn push(&mut self, line: usize, value: Result<[f64; 3], String>) {
+        if self.failed.is_some() {
+            return;
+        }
+        let why = match value {
+            Ok(v) => {
+                let length = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+                if v == [0.0; 3] || v.iter().all(|c| c.is_nan()) {
+                    // A missing normal, kept as zero.
+                    self.normals.push([0.0; 3]);
+                    return;
+                }
+                if (length - 1.0).abs() <= UNIT_TOLERANCE {
+                    self.any_unit = true;
+                    self.normals.push(v);
+                    return;
+                }
+                format!("{} {} {} has length {length:.6}", v[0], v[1], v[2])
+            }
+            Err(why) => why,
+        };
+        self.failed = Some((line, why));
+        // Not normals: their memory is not needed.
+        self.normals = Vec::new();
+    }
+}
+
+/// Reads whitespace-separated rows (`.xyz`, `.txt`, `.pts`) and reports what it noticed.
+///
+/// Blank lines and lines whose first non-blank character is `#` are ignored. A first data
+/// row holding a single non-negative integer is the point-count line some scanners write at
+/// the top of `.pts` files, and is skipped. The first data row fixes the column count; every
+/// later row must have as many. The columns are read by this rule:
+///
+/// - With [`ReadOptions::columns`], by those names: the count must match, `x y z` and
+///   `nx ny nz` (if named) are parsed, every other column is skipped unparsed.
+/// - Otherwise columns 1–3 are `x y z` (fewer than 3 columns is an error). Columns 4–6, when
+///   present, are read as normals only if on **every** row they form a unit vector,
+///   `|length − 1| ≤` [`UNIT_TOLERANCE`], or are `0 0 0` or `nan nan nan` (a missing normal,
+///   read as `0 0 0`), with at least one unit row. Otherwise (colours `r g b` as 0–255 integers or 0–1 fractions, intensities,
+///   text) they are not normals, and a note names them, the first row that is not a unit
+///   vector, and the way to name the columns. Every other column is skipped, with a note.
+///
+/// `name` is the display name used in errors and notes; each note is one line starting
+/// with it.
+///
+/// # Errors
+/// [`ReadError::UnsupportedColumnCount`] for fewer than 3 columns,
+/// [`ReadError::ColumnsMismatch`] when the named columns do not match the file,
+/// [`ReadError::ColumnCount`], [`ReadError::Ascii`] for an `x y z` (or named normal) value
+/// that is not a finite number or for text that is not UTF-8, and [`ReadError::Io`].
+pub fn read_xyz_with(
+    reader: impl BufRead,
+    name: &str,
+    options: &ReadOptions,
+) -> Result<ReadOutcome, ReadError> {
     let mut lines = Lines::new(reader, 0);
-    let mut columns = None;
+    let mut roles: Vec<Role> = Vec::new();
     let mut first_row = true;
     let mut cloud = CloudBuilder::new(false, 0);
+    let mut check: Option<UnitCheck> = None;
     while let Some((line, text)) = lines.next_line(name)? {
         if text.trim_start().starts_with('#') {
             continue;
         }
-        let mut fields = [""; 6];
-        let mut found = 0;
-        for token in text.split_ascii_whitespace() {
-            if let Some(field) = fields.get_mut(found) {
-                *field = token;
+        let found = text.split_ascii_whitespace().count();
+        if roles.is_empty() {
+            let is_count_line = found == 1
+                && text
+                    .split_ascii_whitespace()
+                    .next()
+                    .is_some_and(|t| t.parse::<u64>().is_ok());
+            if std::mem::replace(&mut first_row, false) && is_count_line {
+                continue;
             }
-            found += 1;
+            if found < 3 {
+                return Err(ReadError::UnsupportedColumnCount {
+                    file: name.to_owned(),
+                    line,
+                    found,
+                });
+            }
+            roles = match &options.columns {
+                Some(columns) => {
+                    if columns.len() != found {
+                        return Err(ReadError::ColumnsMismatch {
+                            file: name.to_owned(),
+                            line,
+                            found,
+                            named: columns.to_string(),
+                        });
+                    }
+                    cloud = CloudBuilder::new(columns.has_normals(), 0);
+                    columns
+                        .slots()
+                        .into_iter()
+                        .map(|s| s.map_or(Role::Skip, Role::Slot))
+                        .collect()
+                }
+                None => {
+                    if found >= 6 {
+                        check = Some(UnitCheck::default());
+                    }
+                    (0..found)
+                        .map(|c| match c {
+                            0..3 => Role::Slot(c),
+                            3..6 => Role::Candidate(c - 3),
+                            _ => Role::Skip,
+                        })
+                        .collect()
+                }
+            };
         }
-        let expected = match columns {
-            Some(expected) => expected,
-            None => {
-                let is_count_line = found == 1 && fields[0].parse::<u64>().is_ok();
-                if std::mem::replace(&mut first_row, false) && is_count_line {
-                    continue;
-                }
-                if found != 3 && found != 6 {
-                    return Err(ReadError::UnsupportedColumnCount {
-                        file: name.to_owned(),
-                        line,
-                        found,
-                    });
-                }
-                columns = Some(found);
-                cloud = CloudBuilder::new(found == 6, 0);
-                found
-            }
-        };
-        if found != expected {
+        if found != roles.len() {
             return Err(ReadError::ColumnCount {
                 file: name.to_owned(),
                 line,
                 found,
-                expected,
+                expected: roles.len(),
             });
         }
         let mut values = [0.0; 6];
-        for (column, ((value, field), slot_name)) in values
-            .iter_mut()
-            .zip(fields)
-            .zip(SLOT_NAMES)
-            .enumerate()
-            .take(found)
-        {
-            *value = parse_finite(field).map_err(|message| ReadError::Ascii {
-                file: name.to_owned(),
-                line,
-                field: format!("column {} ({slot_name})", column + 1),
-                message,
-            })?;
+        let mut candidate: Result<[f64; 3], String> = Ok([0.0; 3]);
+        for (column, (token, role)) in text.split_ascii_whitespace().zip(&roles).enumerate() {
+            match *role {
+                Role::Slot(slot) => {
+                    let value = parse_finite(token).map_err(|message| ReadError::Ascii {
+                        file: name.to_owned(),
+                        line,
+                        field: format!(
+                            "column {} ({})",
+                            column + 1,
+                            SLOT_NAMES.get(slot).copied().unwrap_or("?")
+                        ),
+                        message,
+                    })?;
+                    if let Some(dst) = values.get_mut(slot) {
+                        *dst = value;
+                    }
+                }
+                Role::Candidate(k) => {
+                    if let Ok(v) = &mut candidate {
+                        // NaN is let through: `nan nan nan` is a missing normal, as the
+                        // curvature output writes for a failed point.
+                        match token.parse::<f64>() {
+                            Ok(value) if !value.is_infinite() => {
+                                if let Some(dst) = v.get_mut(k) {
+                                    *dst = value;
+                                }
+                            }
+                            _ => {
+                                candidate = Err(format!(
+                                    "column {} is {}",
+                                    column + 1,
+                                    crate::error::quoted(token)
+                                ));
+                            }
+                        }
+                    }
+                }
+                Role::Skip => {}
+            }
+        }
+        if let Some(check) = &mut check {
+            check.push(line, candidate);
         }
         cloud.push(values);
     }
-    Ok(cloud.finish())
+    let mut cloud = cloud.finish();
+    let mut notes = Vec::new();
+    let width = roles.len();
+    if options.columns.is_none() && width > 3 {
+        if let Some(check) = check {
+            match check.failed {
+                None if check.any_unit => cloud.normals = Some(check.normals),
+                None => notes.push(format!(
+                    "{name}: columns 4-6 are 0 0 0 on every row; not read as normals"
+                )),
+                Some((line, why)) => notes.push(format!(
+                    "{name}: columns 4-6 are not read as normals: normals must be unit vectors \
+                     (|length - 1| <= {UNIT_TOLERANCE}) or 0 0 0 on every row, but line \
+                     {line}: {why}; the columns are ignored (name them with --columns, e.g. \
+                     x,y,z,r,g,b, or x,y,z,nx,ny,nz to read them as normals anyway)"
+                )),
+            }
+        }
+        // Columns 4-6 of a wider file are accounted for above.
+        let ignored_from = if width >= 6 { 7 } else { 4 };
+        if width >= ignored_from {
+            let range = if width == ignored_from {
+                format!("column {width} is")
+            } else {
+                format!("columns {ignored_from}-{width} are")
+            };
+            notes.push(format!(
+                "{name}: {width} columns; {range} ignored (name the columns with --columns to \
+                 choose)"
+            ));
+        }
+    }
+    Ok(ReadOutcome { cloud, notes })
 }
 
 /// Reads comma-separated values with a header row naming the columns.
@@ -101,6 +258,22 @@ pub fn read_xyz(reader: impl BufRead, name: &str) -> Result<PointCloud, ReadErro
 /// [`ReadError::MissingField`], [`ReadError::PartialNormals`], [`ReadError::ColumnCount`],
 /// [`ReadError::Ascii`] for a value that is not a finite number, and [`ReadError::Io`].
 pub fn read_csv(reader: impl BufRead, name: &str) -> Result<PointCloud, ReadError> {
+    read_csv_with(reader, name, &ReadOptions::default()).map(|r| r.cloud)
+}
+
+/// Reads CSV as [`read_csv`] does; with [`ReadOptions::columns`], those names replace the
+/// header row's (which is still skipped, and must have as many fields). Normals named `nx`,
+/// `ny`, `nz` are taken as normals (a header, unlike a headerless file, says what they
+/// are). No notes yet: the outcome carries the cloud.
+///
+/// # Errors
+/// Those of [`read_csv`], and [`ReadError::ColumnsMismatch`] when the named columns do not
+/// match the header.
+pub fn read_csv_with(
+    reader: impl BufRead,
+    name: &str,
+    options: &ReadOptions,
+) -> Result<ReadOutcome, ReadError> {
     let mut lines = Lines::new(reader, 0);
     let Some((header_line, header)) = lines.next_line(name)? else {
         return Err(ReadError::Header {
@@ -114,10 +287,21 @@ pub fn read_csv(reader: impl BufRead, name: &str) -> Result<PointCloud, ReadErro
         line: header_line,
         message,
     };
-    let names = CsvFields::new(header)
+    let mut names = CsvFields::new(header)
         .map(|field| field.map(|f| f.trim().to_ascii_lowercase()))
         .collect::<Result<Vec<_>, _>>()
         .map_err(|message| header_error(message.to_owned()))?;
+    if let Some(columns) = &options.columns {
+        if columns.len() != names.len() {
+            return Err(ReadError::ColumnsMismatch {
+                file: name.to_owned(),
+                line: header_line,
+                found: names.len(),
+                named: columns.to_string(),
+            });
+        }
+        names = columns.names().to_vec();
+    }
     let width = names.len();
     // For each column, the slot of SLOT_NAMES it fills, if any.
     let mut targets = vec![None; width];
@@ -190,7 +374,10 @@ pub fn read_csv(reader: impl BufRead, name: &str) -> Result<PointCloud, ReadErro
         }
         cloud.push(values);
     }
-    Ok(cloud.finish())
+    Ok(ReadOutcome {
+        cloud: cloud.finish(),
+        notes: Vec::new(),
+    })
 }
 
 /// The fields of one CSV line, unquoted. Yields an error message for a malformed quoted field

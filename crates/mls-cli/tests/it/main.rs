@@ -5,6 +5,7 @@ mod adaptive;
 mod atomic;
 mod bad_input;
 mod chunks;
+mod columns;
 mod common;
 mod curvature_bunny;
 mod eval;

@@ -2,6 +2,7 @@
 
 mod adaptive;
 mod adversarial;
+mod buildings;
 mod clouds;
 mod invariance;
 mod normals;

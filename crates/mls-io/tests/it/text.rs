@@ -1,6 +1,9 @@
 //! XYZ/TXT/PTS and CSV files with known contents.
 
-use mls_io::{read_csv, read_xyz};
+use mls_io::{
+    ColumnNames, PointCloud, ReadError, ReadOptions, ReadOutcome, read_csv, read_csv_with,
+    read_point_cloud_with, read_xyz, read_xyz_with,
+};
 
 #[test]
 fn xyz_points_with_comments_tabs_and_crlf() {
@@ -59,4 +62,194 @@ fn csv_with_normals() {
     let cloud = read_csv(text.as_bytes(), "a.csv").unwrap();
     assert_eq!(cloud.points, [[1.0, 2.0, 3.0]]);
     assert_eq!(cloud.normals, Some(vec![[0.0, 0.0, 1.0]]));
+}
+
+// ---------------------------------------------------------------------------------------------
+// Which columns of a headerless file are normals (issue 14).
+
+fn read_with(text: &str, columns: Option<&str>) -> Result<ReadOutcome, ReadError> {
+    let options = ReadOptions {
+        columns: columns.map(|c| ColumnNames::parse(c).unwrap()),
+    };
+    read_xyz_with(text.as_bytes(), "scan.txt", &options)
+}
+
+#[test]
+fn rgb_as_0_to_255_integers_is_not_normals() {
+    // CloudCompare's ASCII export with colour.
+    let text = "0.5 1.5 2.5 255 128 0\n1.5 2.5 3.5 0 0 1\n2.5 3.5 4.5 12 200 37\n";
+    let read = read_with(text, None).unwrap();
+    assert_eq!(
+        read.cloud.points,
+        [[0.5, 1.5, 2.5], [1.5, 2.5, 3.5], [2.5, 3.5, 4.5]]
+    );
+    assert_eq!(read.cloud.normals, None);
+    assert_eq!(read.notes.len(), 1, "{:?}", read.notes);
+    let note = &read.notes[0];
+    for part in [
+        "scan.txt: columns 4-6 are not read as normals",
+        "line 1: 255 128 0 has length 285.",
+        "--columns",
+    ] {
+        assert!(note.contains(part), "{note}");
+    }
+}
+
+#[test]
+fn rgb_as_0_to_1_fractions_is_not_normals() {
+    // Pure red and pure blue are unit vectors; grey on line 3 is not.
+    let text = "0 0 0 1 0 0\n1 0 0 0 0 1\n0 1 0 0.5 0.5 0.5\n0 0 1 0.2 0.4 0.6\n";
+    let read = read_with(text, None).unwrap();
+    assert_eq!(read.cloud.len(), 4);
+    assert_eq!(read.cloud.normals, None);
+    assert!(
+        read.notes[0].contains("line 3: 0.5 0.5 0.5 has length 0.866025"),
+        "{:?}",
+        read.notes
+    );
+}
+
+#[test]
+fn unit_columns_are_normals_within_the_tolerance() {
+    // Three decimals (length 0.99937), a missing normal written as zeros and as NaN (the
+    // curvature output of a failed point), and an exact unit vector.
+    let text = "0 0 0 0.577 0.577 0.577\n1 0 0 0 0 0\n2 0 0 nan nan nan\n3 0 0 0.6 -0.8 0\n";
+    let read = read_with(text, None).unwrap();
+    assert_eq!(read.notes, Vec::<String>::new());
+    assert_eq!(
+        read.cloud.normals,
+        Some(vec![
+            [0.577, 0.577, 0.577],
+            [0.0; 3],
+            [0.0; 3],
+            [0.6, -0.8, 0.0]
+        ])
+    );
+    // Two decimals are outside 1e-3 (length 1.0046): not normals, and the note says so.
+    let read = read_with("0 0 0 0.58 0.58 0.58\n", None).unwrap();
+    assert_eq!(read.cloud.normals, None);
+    assert!(
+        read.notes[0].contains("length 1.004589"),
+        "{:?}",
+        read.notes
+    );
+    // All zeros is no normals.
+    let read = read_with("0 0 0 0 0 0\n1 1 1 0 0 0\n", None).unwrap();
+    assert_eq!(read.cloud.normals, None);
+    assert!(
+        read.notes[0].contains("0 0 0 on every row"),
+        "{:?}",
+        read.notes
+    );
+}
+
+#[test]
+fn four_and_seven_columns() {
+    // x y z intensity: the fourth column is skipped unparsed, with a note.
+    let read = read_with("1 2 3 17\n4 5 6 roof\n", None).unwrap();
+    assert_eq!(read.cloud.points, [[1.0, 2.0, 3.0], [4.0, 5.0, 6.0]]);
+    assert_eq!(read.cloud.normals, None);
+    assert_eq!(
+        read.notes,
+        ["scan.txt: 4 columns; column 4 is ignored (name the columns with --columns to choose)"]
+    );
+    // x y z nx ny nz intensity.
+    let read = read_with("1 2 3 0 0 1 0.25\n4 5 6 1 0 0 0.5\n", None).unwrap();
+    assert_eq!(
+        read.cloud.normals,
+        Some(vec![[0.0, 0.0, 1.0], [1.0, 0.0, 0.0]])
+    );
+    assert_eq!(read.notes.len(), 1);
+    assert!(read.notes[0].contains("7 columns; column 7 is ignored"));
+    // x y z r g b intensity: neither colour nor intensity is read.
+    let read = read_with("1 2 3 10 20 30 0.25\n", None).unwrap();
+    assert_eq!(read.cloud.normals, None);
+    assert_eq!(read.notes.len(), 2, "{:?}", read.notes);
+    // Nine columns, colour then normals: 7-9 are not guessed at.
+    let read = read_with("1 2 3 10 20 30 0 0 1\n", None).unwrap();
+    assert_eq!(read.cloud.normals, None);
+    assert!(
+        read.notes[1].contains("columns 7-9 are ignored"),
+        "{:?}",
+        read.notes
+    );
+    // The old reader's entry point reads the same, without the notes.
+    assert_eq!(
+        read_xyz("1 2 3 10 20 30 0.25\n".as_bytes(), "a.xyz").unwrap(),
+        PointCloud {
+            points: vec![[1.0, 2.0, 3.0]],
+            normals: None
+        }
+    );
+}
+
+#[test]
+fn named_columns_override_the_rule() {
+    // Colour then normals, named.
+    let text = "1 2 3 10 20 30 0 0 1\n4 5 6 1 0 0 0 1 0\n";
+    let read = read_with(text, Some("x,y,z,r,g,b,nx,ny,nz")).unwrap();
+    assert_eq!(read.cloud.points, [[1.0, 2.0, 3.0], [4.0, 5.0, 6.0]]);
+    assert_eq!(
+        read.cloud.normals,
+        Some(vec![[0.0, 0.0, 1.0], [0.0, 1.0, 0.0]])
+    );
+    assert!(read.notes.is_empty());
+    // Unit vectors named as colours are not normals.
+    let read = read_with("1 2 3 0 0 1\n", Some("x,y,z,r,g,b")).unwrap();
+    assert_eq!(read.cloud.normals, None);
+    assert!(read.notes.is_empty());
+    // Any order; named normals are taken as they are, not checked for length.
+    let read = read_with("9 1 2 3 0 0 2\n", Some("intensity,x,y,z,nx,ny,nz")).unwrap();
+    assert_eq!(read.cloud.points, [[1.0, 2.0, 3.0]]);
+    assert_eq!(read.cloud.normals, Some(vec![[0.0, 0.0, 2.0]]));
+    // Errors name the file, the line and the field.
+    let err = read_with("1 2 3 0 0 1\n4 5 6 0 x 1\n", Some("x,y,z,nx,ny,nz"))
+        .unwrap_err()
+        .to_string();
+    assert_eq!(err, "scan.txt: line 2, column 5 (ny): not a number: \"x\"");
+    let err = read_with("# head\n1 2 3 4 5 6\n", Some("x,y,z,nx,ny,nz,i"))
+        .unwrap_err()
+        .to_string();
+    assert_eq!(
+        err,
+        "scan.txt: line 2: 6 columns, but --columns names x,y,z,nx,ny,nz,i"
+    );
+    // CSV: the names replace the header's.
+    let options = ReadOptions {
+        columns: Some(ColumnNames::parse("z,y,x,_").unwrap()),
+    };
+    let read = read_csv_with("a,b,c,d\n1,2,3,text\n".as_bytes(), "t.csv", &options).unwrap();
+    assert_eq!(read.cloud.points, [[3.0, 2.0, 1.0]]);
+    let err = read_csv_with("a,b\n1,2\n".as_bytes(), "t.csv", &options)
+        .unwrap_err()
+        .to_string();
+    assert_eq!(err, "t.csv: line 1: 2 columns, but --columns names z,y,x,_");
+}
+
+#[test]
+fn named_columns_are_refused_for_ply() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("a.ply");
+    std::fs::write(
+        &path,
+        "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\nend_header\n1 2 3\n",
+    )
+    .unwrap();
+    let options = ReadOptions {
+        columns: Some(ColumnNames::parse("x,y,z").unwrap()),
+    };
+    let err = read_point_cloud_with(&path, &options)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("a.ply: --columns applies to text files"),
+        "{err}"
+    );
+    assert_eq!(
+        read_point_cloud_with(&path, &ReadOptions::default())
+            .unwrap()
+            .cloud
+            .points,
+        [[1.0, 2.0, 3.0]]
+    );
 }
