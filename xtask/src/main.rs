@@ -32,6 +32,11 @@ Tasks:
                  The paper's Tables 1-2, Figure 8, h and cutoff studies, adaptive h and figures;
                  writes docs/paper.md and docs/figures/. --check: fails if docs/paper.md is stale.
                  --quick: reduced densities into target/paper/.
+  accuracy [--seeds N]
+                 Every estimator on random, jittered, grid, scanline and noisy clouds against
+                 the analytic truth; writes docs/accuracy.md.
+  accuracy-explore [CLOUD]
+                 The same clouds with several jet settings, printed (for studies).
   ci             fmt --check, clippy -D warnings, tests, validate --quick.";
 
 fn main() -> Result<()> {
@@ -44,6 +49,7 @@ fn main() -> Result<()> {
     let rest = &args[1..];
     match task.as_str() {
         "validate" => validate::run(&validate::Options::parse(rest)?),
+        "accuracy" => accuracy::run(rest),
         "accuracy-explore" => accuracy::explore(rest),
         "faults" => faults::run(),
         "robustness" => robustness::run(&robustness::Options::parse(rest)?),

@@ -250,9 +250,15 @@ pub fn jet_witness(
                 )
             })
             .collect();
+        let equations = rows.len()
+            + if slopes {
+                2 * rows.iter().filter(|r| r.3.z > 0.5).count()
+            } else {
+                0
+            };
         let solution = (2..=config.degree.clamp(2, 4))
             .rev()
-            .filter(|&d| near.len() as f64 >= 1.5 * ((d + 1) * (d + 2) / 2) as f64)
+            .filter(|&d| equations as f64 >= 1.5 * ((d + 1) * (d + 2) / 2) as f64)
             .find_map(|d| fit_once(&rows, d, slopes).map(|f| (d, f)));
         let Some((degree, (c, ex, _, cov))) = solution else {
             if best.is_some() {

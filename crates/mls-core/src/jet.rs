@@ -226,24 +226,31 @@ pub fn fit(
     let mut heights = Equations::new();
     let mut slopes = Equations::new();
     let mut count = 0;
+    let mut slope_rows = 0;
     for_each_row(samples, frame, inv_r2, radius, normals, |row| {
         match row {
             Row::Height { phi, z, w } => {
                 heights.add(&phi, z, w, terms);
                 count += 1;
             }
-            Row::Slope { phi, slope, w } => slopes.add(&phi, slope, w, terms),
+            Row::Slope { phi, slope, w } => {
+                slopes.add(&phi, slope, w, terms);
+                slope_rows += 1;
+            }
         };
     });
     heights.symmetrise(terms);
     slopes.symmetrise(terms);
-    // A degree needs 1.5 samples per coefficient (a count, so that the choice never hangs on
-    // rounding); the pivot test in `solve` only catches degenerate layouts such as a line.
+    // A degree needs 1.5 equations (heights and slopes) per coefficient: a count, so that the
+    // choice never hangs on rounding; the pivot test in `solve` only catches degenerate layouts such as a line.
     let mut deg = max_degree;
-    while deg > 2 && (count as f64) < MIN_SAMPLES_PER_COEFFICIENT * coefficient_count(deg) as f64 {
+    while deg > 2
+        && ((count + slope_rows) as f64)
+            < MIN_EQUATIONS_PER_COEFFICIENT * coefficient_count(deg) as f64
+    {
         deg -= 1;
     }
-    if (count as f64) < MIN_SAMPLES_PER_COEFFICIENT * coefficient_count(2) as f64 {
+    if ((count + slope_rows) as f64) < MIN_EQUATIONS_PER_COEFFICIENT * coefficient_count(2) as f64 {
         return None;
     }
     loop {
@@ -342,8 +349,8 @@ struct Solution {
     covariance: Matrix,
 }
 
-/// Samples per coefficient a degree needs.
-pub const MIN_SAMPLES_PER_COEFFICIENT: f64 = 1.5;
+/// Equations (heights and slopes) per coefficient a degree needs.
+pub const MIN_EQUATIONS_PER_COEFFICIENT: f64 = 1.5;
 
 /// Predicted standard deviations never fall below this fraction of `1/ρ`: below it an exact
 /// fit's residual is rounding, and a zero-width interval would make the scale choice follow it.

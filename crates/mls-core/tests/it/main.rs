@@ -5,6 +5,7 @@ mod adversarial;
 mod buildings;
 mod clouds;
 mod invariance;
+mod jet;
 mod normals;
 mod projection;
 mod surface;
