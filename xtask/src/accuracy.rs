@@ -11,7 +11,7 @@ use mls_core::normals::{
     DEFAULT_SPACING_NEIGHBOURS, NormalsConfig, estimate_normals, spacing_statistics, suggest_h,
 };
 use mls_core::{JetConfig, MlsConfig, MlsSurface, Parallelism, Point, Vector};
-use mls_shapes::{Ellipsoid, ParametricSurface, SurfacePoint, Torus};
+use mls_shapes::{Ellipsoid, SurfacePoint, Torus};
 use nalgebra::{DMatrix, DVector, Matrix2, Matrix3, SymmetricEigen};
 use rayon::prelude::*;
 
@@ -61,7 +61,7 @@ impl Cloud {
     }
 }
 
-fn surface_points<S: ParametricSurface>(samples: &[mls_shapes::Sample]) -> Vec<SurfacePoint> {
+fn surface_points(samples: &[mls_shapes::Sample]) -> Vec<SurfacePoint> {
     samples.iter().map(|s| s.surface).collect()
 }
 
@@ -69,7 +69,7 @@ fn surface_points<S: ParametricSurface>(samples: &[mls_shapes::Sample]) -> Vec<S
 pub(crate) fn clouds(seed: u64) -> Vec<Cloud> {
     let torus = Torus::new(6.0, 2.0);
     let paper = Torus::new(1.0, 0.2);
-    let sp = surface_points::<Torus>;
+    let sp = surface_points;
     let mut out = vec![
         Cloud::from_samples(
             "torus 6/2, random 10k".into(),
@@ -317,8 +317,8 @@ pub(crate) fn explore(args: &[String]) -> Result<()> {
     let seed = 1;
     let mut methods = vec![Method::Reference, Method::Paper];
     for normals in [mls_core::NormalData::Ignore, mls_core::NormalData::Slopes] {
-        for radius in [1.5] {
-            for scales in [6] {
+        for radius in [1.5, 2.0] {
+            for scales in [1, 5] {
                 methods.push(Method::Jet(JetConfig {
                     radius,
                     scales,

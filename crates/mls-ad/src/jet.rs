@@ -215,7 +215,7 @@ pub fn jet_witness(
             .filter_map(|s| {
                 let d = s.point.coords - x;
                 let t = 1.0 - d.norm_squared() / (rho * rho);
-                (t > 0.0).then(|| (d, s.normal, t * t * t))
+                (t > 0.0).then_some((d, s.normal, t * t * t))
             })
             .collect();
         if near.len() < 6 {

@@ -166,9 +166,9 @@ impl Equations {
         for a in 0..terms {
             let wa = w * phi[a];
             self.rhs[a] += wa * y;
-            for b in 0..=a {
-                self.m[(a, b)] += wa * phi[b];
-                self.m2[(a, b)] += wa * w * phi[b];
+            for (b, &pb) in phi.iter().enumerate().take(a + 1) {
+                self.m[(a, b)] += wa * pb;
+                self.m2[(a, b)] += wa * w * pb;
             }
         }
         self.weight += w;
