@@ -317,11 +317,11 @@ pub(crate) fn explore(args: &[String]) -> Result<()> {
     let seed = 1;
     let mut methods = vec![Method::Reference, Method::Paper];
     for normals in [mls_core::NormalData::Ignore, mls_core::NormalData::Slopes] {
-        for radius in [1.5, 2.0] {
-            for scales in [1, 5] {
+        for radius in [1.5] {
+            for confidence in [3.0] {
                 methods.push(Method::Jet(JetConfig {
                     radius,
-                    scales,
+                    confidence,
                     normals,
                     ..JetConfig::default()
                 }));

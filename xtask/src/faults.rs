@@ -60,6 +60,34 @@ const FAULTS: &[Fault] = &[
         original: "s2[c].matrix() * (4.0 * a * a)",
         replacement: "s2[c].matrix() * (2.0 * a * a)",
     },
+    Fault {
+        name: "J1 slope sign",
+        description: "the jet's slope data from a normal ν taken as +ν_u/ν_w instead of −ν_u/ν_w",
+        file: "crates/mls-core/src/jet.rs",
+        original: "slope: -a / c,",
+        replacement: "slope: a / c,",
+    },
+    Fault {
+        name: "J2 mixed term of the jet's Hessian",
+        description: "H = −(2a20 t1t1ᵀ + a11(t1t2ᵀ + t2t1ᵀ) + 2a02 t2t2ᵀ) with 2a11 for a11",
+        file: "crates/mls-core/src/jet.rs",
+        original: "(t1 * t2.transpose() + t2 * t1.transpose()) * a[A11]",
+        replacement: "(t1 * t2.transpose() + t2 * t1.transpose()) * (2.0 * a[A11])",
+    },
+    Fault {
+        name: "J3 predicted sd's mixed term",
+        description: "δk = −2(c² δa20 + cs δa11 + s² δa02)/|∇F| with 2cs for cs",
+        file: "crates/mls-core/src/jet.rs",
+        original: "Vector::new(cs * cs, cs * sn, sn * sn)",
+        replacement: "Vector::new(cs * cs, 2.0 * cs * sn, sn * sn)",
+    },
+    Fault {
+        name: "J4 slope degrees of freedom",
+        description: "the slopes' share of the hat matrix's trace counted without the weight λ",
+        file: "crates/mls-core/src/jet.rs",
+        original: "slopes.weight - lambda * (inv * sp2).trace()",
+        replacement: "slopes.weight - (inv * sp2).trace()",
+    },
 ];
 
 pub(crate) fn run() -> Result<()> {

@@ -88,7 +88,7 @@ const QUANTITIES: [&str; 16] = [
     "Eq.5 = Eq.7",
     "jet k1",
     "jet k2",
-    "jet predicted sd",
+    "jet predicted error",
     "jet support and degree",
 ];
 
@@ -163,7 +163,7 @@ pub(crate) fn run(o: &Options) -> Result<()> {
             "| {name} | {:.2e} | {:#x} | {} |",
             w.value, w.seed, w.evals
         )?;
-        let threshold = if *name == "jet predicted sd" {
+        let threshold = if *name == "jet predicted error" {
             SD_THRESHOLD
         } else {
             THRESHOLD
@@ -309,8 +309,12 @@ fn compare_jets(
                 let kappa = w.k1.abs().max(w.k2.abs()).max(1.0 / patch.h);
                 tally.record(12, (j.curvature.k1 - w.k1).abs() / kappa, seed);
                 tally.record(13, (j.curvature.k2 - w.k2).abs() / kappa, seed);
-                let sd_scale = w.sd[0].max(w.sd[1]).max(1e-9 * kappa);
-                let sd = (j.sd[0] - w.sd[0]).abs().max((j.sd[1] - w.sd[1]).abs());
+                let sd_scale = (w.sd[0].hypot(w.bias[0]))
+                    .max(w.sd[1].hypot(w.bias[1]))
+                    .max(1e-9 * kappa);
+                let pe = j.predicted_error();
+                let we = [w.sd[0].hypot(w.bias[0]), w.sd[1].hypot(w.bias[1])];
+                let sd = (pe[0] - we[0]).abs().max((pe[1] - we[1]).abs());
                 tally.record(14, sd / sd_scale, seed);
                 let same = j.fit.degree == w.degree && j.fit.radius == w.radius;
                 tally.record(15, if same { 0.0 } else { 1.0 }, seed);

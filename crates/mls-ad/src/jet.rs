@@ -19,6 +19,8 @@ pub struct JetWitness {
     pub k2: f64,
     /// Predicted standard deviations of k1 and k2 (noise part).
     pub sd: [f64; 2],
+    /// Estimated bias of k1 and k2 from the neighbouring scale.
+    pub bias: [f64; 2],
     /// Degree fitted.
     pub degree: usize,
     /// Support radius chosen.
@@ -207,6 +209,9 @@ pub fn jet_witness(
     let slopes = config.normals == mls_core::NormalData::Slopes;
     let mut frame: Option<(Vector3<f64>, Vector3<f64>, Vector3<f64>)> = None;
     let mut best: Option<JetWitness> = None;
+    let mut ladder: Vec<JetWitness> = Vec::new();
+    let mut accepted = 0;
+    let mut fallback: Option<JetWitness> = None;
     let (mut lo, mut hi) = ([f64::NEG_INFINITY; 2], [f64::INFINITY; 2]);
     for j in 0..config.scales.max(1) {
         let rho = config.radius * h * 2f64.sqrt().powi(j as i32);
@@ -282,10 +287,15 @@ pub fn jet_witness(
             k1: wc.k1,
             k2: wc.k2,
             sd,
+            bias: [0.0; 2],
             degree,
             radius: rho,
             foot,
         };
+        if best.is_none() && degree < config.degree.clamp(2, 4) {
+            fallback = fallback.or(Some(here));
+            continue;
+        }
         let k = [here.k1, here.k2];
         let mut agree = true;
         for i in 0..2 {
@@ -293,10 +303,43 @@ pub fn jet_witness(
             hi[i] = hi[i].min(k[i] + config.confidence * sd[i]);
             agree &= lo[i] <= hi[i];
         }
-        if !agree && best.is_some() {
+        ladder.push(here);
+        if !agree {
+            accepted = ladder.len() - 1;
             break;
         }
+        accepted = ladder.len();
         best = Some(here);
+        // Stop once the previous scale's bias (from the last step, ∝ ρ⁴) exceeds its scatter.
+        if let [.., a, b] = ladder.as_slice() {
+            let bias2 = ((b.k1 - a.k1) / 3.0).powi(2) + ((b.k2 - a.k2) / 3.0).powi(2);
+            if bias2 > a.sd[0].powi(2) + a.sd[1].powi(2) {
+                break;
+            }
+        }
     }
-    best
+    if best.is_none() {
+        return fallback;
+    }
+    // Least estimated squared error among the accepted scales, the bias of each from its
+    // neighbour on the ladder (∝ ρ⁴: factor 4 per step of √2).
+    (0..accepted)
+        .map(|j| {
+            let (a, b, f) = if j + 1 < ladder.len() {
+                (&ladder[j], &ladder[j + 1], 1.0 / 3.0)
+            } else if j > 0 {
+                (&ladder[j - 1], &ladder[j], 4.0 / 3.0)
+            } else {
+                (&ladder[j], &ladder[j], 0.0)
+            };
+            let bias = [(b.k1 - a.k1).abs() * f, (b.k2 - a.k2).abs() * f];
+            let w = JetWitness { bias, ..ladder[j] };
+            let mse = (0..2).map(|i| w.sd[i].powi(2) + bias[i].powi(2)).sum::<f64>();
+            (mse, w)
+        })
+        .fold(None::<(f64, JetWitness)>, |acc, (m, w)| match acc {
+            Some((am, _)) if am <= m => acc,
+            _ => Some((m, w)),
+        })
+        .map(|(_, w)| w)
 }

@@ -92,7 +92,7 @@ impl Default for JetConfig {
             degree: 4,
             radius: 1.5,
             scales: 5,
-            confidence: 2.0,
+            confidence: 3.0,
             normals: NormalData::Slopes,
         }
     }
@@ -208,6 +208,58 @@ impl JetPoint {
     pub fn predicted_error(&self) -> [f64; 2] {
         [0, 1].map(|i| self.sd[i].hypot(self.bias[i]))
     }
+}
+
+/// Whether climbing further cannot lower the error: the previous scale's bias, estimated from
+/// the last step, already exceeds its scatter (`Σ b² > Σ sd²` over k1, k2). Above it the bias
+/// grows fourfold per step while the scatter falls at most √8-fold (`∝ 1/(ρ² √N)`).
+pub fn past_optimum(ladder: &[JetPoint]) -> bool {
+    let [.., a, b] = ladder else {
+        return false;
+    };
+    let (bias2, sd2): (f64, f64) = (0..2)
+        .map(|i| {
+            let bias = (b.curvature_k(i) - a.curvature_k(i)).abs() / 3.0;
+            (bias * bias, a.sd[i] * a.sd[i])
+        })
+        .fold((0.0, 0.0), |(x, y), (p, q)| (x + p, y + q));
+    bias2 > sd2
+}
+
+/// The scale of least estimated mean squared error among the scales the confidence intervals
+/// accepted.
+///
+/// `ladder` holds the first `accepted` fits (increasing radius), those the intervals
+/// accepted, possibly followed by the first fit they rejected. Each accepted scale's bias is estimated from its neighbour on the
+/// ladder: with the bias ∝ ρ⁴ of a degree-4 fit, a step of √2 quadruples it, so
+/// `b_j = |k_{j+1} − k_j|/3` (or `4|k_j − k_{j−1}|/3` for the last one). The chosen point
+/// carries that bias, which enters its predicted error. Under noise the scatter falls with
+/// the scale and a larger one wins; on clean data the bias grows and the smallest wins.
+///
+/// # Panics
+/// If `accepted` is 0.
+pub fn choose_scale(ladder: &[JetPoint], accepted: usize) -> JetPoint {
+    let k = |p: &JetPoint| [p.curvature.k1, p.curvature.k2];
+    let mut best: Option<(f64, JetPoint)> = None;
+    for j in 0..accepted {
+        let p = ladder[j];
+        let bias = if j + 1 < ladder.len() {
+            let (a, b) = (k(&p), k(&ladder[j + 1]));
+            [(b[0] - a[0]).abs() / 3.0, (b[1] - a[1]).abs() / 3.0]
+        } else if j > 0 {
+            let (a, b) = (k(&ladder[j - 1]), k(&p));
+            [(b[0] - a[0]).abs() * 4.0 / 3.0, (b[1] - a[1]).abs() * 4.0 / 3.0]
+        } else {
+            [0.0; 2]
+        };
+        let candidate = JetPoint { bias, ..p };
+        let [e1, e2] = candidate.predicted_error();
+        let mse = e1 * e1 + e2 * e2;
+        if best.as_ref().is_none_or(|(m, _)| mse < *m) {
+            best = Some((mse, candidate));
+        }
+    }
+    best.map(|(_, p)| p).expect("a non-empty ladder")
 }
 
 /// Fits a jet to `samples` (positions relative to the query, any orientation) in the frame

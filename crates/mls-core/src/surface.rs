@@ -158,6 +158,7 @@ impl MlsSurface {
             scratch: FieldScratch::default(),
             line: Vec::new(),
             offsets: Vec::new(),
+            ladder: Vec::new(),
         }
     }
 
@@ -323,6 +324,8 @@ pub struct Evaluator<'a> {
     line: Vec<LineBlock>,
     /// Samples relative to the query, for the jet fits.
     offsets: Vec<Sample>,
+    /// The jet's fits up the ladder of scales at one query.
+    ladder: Vec<JetPoint>,
 }
 
 impl Evaluator<'_> {
@@ -336,6 +339,9 @@ impl Evaluator<'_> {
         let h = self.surface.kernel.h();
         let mut frame = None;
         let mut best: Option<JetPoint> = None;
+        let mut fallback: Option<JetPoint> = None;
+        self.ladder.clear();
+        let mut agree_last = true;
         let mut failure = PointStatus::NoNeighbours;
         let (mut lo, mut hi) = ([f64::NEG_INFINITY; 2], [f64::INFINITY; 2]);
         for j in 0..config.scales.max(1) {
@@ -384,6 +390,13 @@ impl Evaluator<'_> {
                 failure = PointStatus::GradientVanishes;
                 break;
             };
+            // Fits of a lower degree have a bias of another order: the ladder proper starts at
+            // the first scale that determines the full degree, and a lower-degree fit is kept
+            // only for a point where no scale does (sparse or boundary neighbourhoods).
+            if best.is_none() && fit.degree < config.degree.clamp(2, 4) {
+                fallback = fallback.or(Some(p));
+                continue;
+            }
             let k = [p.curvature.k1, p.curvature.k2];
             let mut agree = true;
             for i in 0..2 {
@@ -391,21 +404,21 @@ impl Evaluator<'_> {
                 hi[i] = hi[i].min(k[i] + config.confidence * p.sd[i]);
                 agree &= lo[i] <= hi[i];
             }
-            match best.as_mut() {
-                Some(b) if !agree => {
-                    // The next scale's estimate measures the bias of the chosen one: with the
-                    // bias ∝ ρ⁴ (degree 4) the step of √2 in ρ quadruples it.
-                    b.bias = [0, 1].map(|i| (k[i] - b.curvature_k(i)).abs() / 3.0);
-                    break;
-                }
-                Some(b) => {
-                    let bias = [0, 1].map(|i| (k[i] - b.curvature_k(i)).abs() * 4.0 / 3.0);
-                    best = Some(JetPoint { bias, ..p });
-                }
-                None => best = Some(p),
+            self.ladder.push(p);
+            agree_last = agree;
+            if !agree {
+                break;
+            }
+            best = Some(p);
+            if jet::past_optimum(&self.ladder) {
+                break;
             }
         }
-        best.ok_or(failure)
+        if best.is_some() {
+            let accepted = self.ladder.len() - usize::from(!agree_last);
+            best = Some(jet::choose_scale(&self.ladder, accepted));
+        }
+        best.or(fallback).ok_or(failure)
     }
 
     /// Collects into the internal buffer the samples within `radius` of `x` (all samples when
