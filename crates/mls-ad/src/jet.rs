@@ -313,7 +313,8 @@ pub fn jet_witness(
         // Stop once the previous scale's bias (from the last step, ∝ ρ⁴) exceeds its scatter.
         if let [.., a, b] = ladder.as_slice() {
             let bias2 = ((b.k1 - a.k1) / 3.0).powi(2) + ((b.k2 - a.k2) / 3.0).powi(2);
-            if bias2 > a.sd[0].powi(2) + a.sd[1].powi(2) {
+            let floor = 2e-8 / a.radius;
+            if bias2 > a.sd[0].powi(2) + a.sd[1].powi(2) || (a.sd[0] <= floor && a.sd[1] <= floor) {
                 break;
             }
         }
@@ -334,7 +335,9 @@ pub fn jet_witness(
             };
             let bias = [(b.k1 - a.k1).abs() * f, (b.k2 - a.k2).abs() * f];
             let w = JetWitness { bias, ..ladder[j] };
-            let mse = (0..2).map(|i| w.sd[i].powi(2) + bias[i].powi(2)).sum::<f64>();
+            let mse = (0..2)
+                .map(|i| w.sd[i].powi(2) + bias[i].powi(2))
+                .sum::<f64>();
             (mse, w)
         })
         .fold(None::<(f64, JetWitness)>, |acc, (m, w)| match acc {

@@ -211,7 +211,8 @@ impl JetPoint {
 }
 
 /// Whether climbing further cannot lower the error: the previous scale's bias, estimated from
-/// the last step, already exceeds its scatter (`Σ b² > Σ sd²` over k1, k2). Above it the bias
+/// the last step, already exceeds its scatter (`Σ b² > Σ sd²` over k1, k2), or that scatter
+/// is at the rounding floor. Above it the bias
 /// grows fourfold per step while the scatter falls at most √8-fold (`∝ 1/(ρ² √N)`).
 pub fn past_optimum(ladder: &[JetPoint]) -> bool {
     let [.., a, b] = ladder else {
@@ -223,7 +224,9 @@ pub fn past_optimum(ladder: &[JetPoint]) -> bool {
             (bias * bias, a.sd[i] * a.sd[i])
         })
         .fold((0.0, 0.0), |(x, y), (p, q)| (x + p, y + q));
-    bias2 > sd2
+    // A scatter at the rounding floor leaves no noise to average away either.
+    let floor = 2.0 * SD_FLOOR / a.fit.radius;
+    bias2 > sd2 || a.sd.iter().all(|&sd| sd <= floor)
 }
 
 /// The scale of least estimated mean squared error among the scales the confidence intervals
@@ -248,7 +251,10 @@ pub fn choose_scale(ladder: &[JetPoint], accepted: usize) -> JetPoint {
             [(b[0] - a[0]).abs() / 3.0, (b[1] - a[1]).abs() / 3.0]
         } else if j > 0 {
             let (a, b) = (k(&ladder[j - 1]), k(&p));
-            [(b[0] - a[0]).abs() * 4.0 / 3.0, (b[1] - a[1]).abs() * 4.0 / 3.0]
+            [
+                (b[0] - a[0]).abs() * 4.0 / 3.0,
+                (b[1] - a[1]).abs() * 4.0 / 3.0,
+            ]
         } else {
             [0.0; 2]
         };
@@ -271,6 +277,7 @@ pub fn fit(
     radius: f64,
     degree: usize,
     normals: NormalData,
+    scratch: &mut JetScratch,
 ) -> Option<JetFit> {
     let inv_r2 = 1.0 / (radius * radius);
     let max_degree = degree.clamp(2, 4);
@@ -279,8 +286,13 @@ pub fn fit(
     let mut slopes = Equations::new();
     let mut count = 0;
     let mut slope_rows = 0;
+    let rows = &mut scratch.rows;
+    rows.clear();
     for_each_row(samples, frame, inv_r2, radius, normals, |row| {
-        match row {
+        rows.push(row)
+    });
+    for row in rows.iter() {
+        match *row {
             Row::Height { phi, z, w } => {
                 heights.add(&phi, z, w, terms);
                 count += 1;
@@ -290,7 +302,7 @@ pub fn fit(
                 slope_rows += 1;
             }
         };
-    });
+    }
     heights.symmetrise(terms);
     slopes.symmetrise(terms);
     // A degree needs 1.5 equations (heights and slopes) per coefficient: a count, so that the
@@ -307,9 +319,9 @@ pub fn fit(
     }
     loop {
         let fitted = match deg {
-            4 => solve::<15>(samples, frame, radius, normals, &heights, &slopes),
-            3 => solve::<10>(samples, frame, radius, normals, &heights, &slopes),
-            _ => solve::<6>(samples, frame, radius, normals, &heights, &slopes),
+            4 => solve::<15>(rows, normals, &heights, &slopes),
+            3 => solve::<10>(rows, normals, &heights, &slopes),
+            _ => solve::<6>(rows, normals, &heights, &slopes),
         };
         if let Some(solution) = fitted {
             let mut coefficients = [0.0; 15];
@@ -334,7 +346,14 @@ pub fn fit(
     }
 }
 
+/// Reusable storage for [`fit`]: the equations of one fit, kept for the residual passes.
+#[derive(Debug, Default)]
+pub struct JetScratch {
+    rows: Vec<Row>,
+}
+
 /// One equation of the fit, in scaled coordinates.
+#[derive(Clone, Copy, Debug)]
 enum Row {
     /// `P(u, v) = z` with weight `w`.
     Height { phi: [f64; 15], z: f64, w: f64 },
@@ -415,9 +434,7 @@ const MAX_SLOPE_WEIGHT: f64 = 1e4;
 /// Solves the leading `N × N` block, with the slope equations weighted by the ratio of the
 /// two estimated noise variances (one re-weighting from an equal start).
 fn solve<const N: usize>(
-    samples: &[Sample],
-    frame: &(Vector, Vector, Vector),
-    radius: f64,
+    rows: &[Row],
     normals: NormalData,
     heights: &Equations,
     slopes: &Equations,
@@ -435,7 +452,6 @@ fn solve<const N: usize>(
         heights.rhs.fixed_view::<N, 1>(0, 0).into_owned(),
         slopes.rhs.fixed_view::<N, 1>(0, 0).into_owned(),
     );
-    let inv_r2 = 1.0 / (radius * radius);
     let use_slopes = normals == NormalData::Slopes && slopes.weight > 0.0;
     let mut lambda = if use_slopes { 1.0 } else { 0.0 };
     let rounds = if use_slopes { 2 } else { 1 };
@@ -457,16 +473,18 @@ fn solve<const N: usize>(
         // Weighted residuals from the samples again (yᵀΩy − cᵀAᵀΩy loses the digits of a
         // small residual).
         let (mut rss_h, mut rss_s) = (0.0, 0.0);
-        for_each_row(samples, frame, inv_r2, radius, normals, |row| match row {
-            Row::Height { phi, z, w } => {
-                let p: f64 = (0..N).map(|k| c[k] * phi[k]).sum();
-                rss_h += w * (z - p) * (z - p);
+        for row in rows {
+            match *row {
+                Row::Height { phi, z, w } => {
+                    let p: f64 = (0..N).map(|k| c[k] * phi[k]).sum();
+                    rss_h += w * (z - p) * (z - p);
+                }
+                Row::Slope { phi, slope, w } => {
+                    let p: f64 = (0..N).map(|k| c[k] * phi[k]).sum();
+                    rss_s += w * (slope - p) * (slope - p);
+                }
             }
-            Row::Slope { phi, slope, w } => {
-                let p: f64 = (0..N).map(|k| c[k] * phi[k]).sum();
-                rss_s += w * (slope - p) * (slope - p);
-            }
-        });
+        }
         // Degrees of freedom left to each kind of data: Σω − its share of the hat matrix's
         // trace (exact for one kind of data with independent noise).
         let dof_h = heights.weight - (inv * hp2).trace();
@@ -522,18 +540,43 @@ fn monomials(u: f64, v: f64) -> [f64; 15] {
     ]
 }
 
-/// `(∂/∂u, ∂/∂v)` of the monomials.
+/// `(∂/∂u, ∂/∂v)` of the monomials, in [`MONOMIALS`] order.
 fn monomial_gradients(u: f64, v: f64) -> ([f64; 15], [f64; 15]) {
-    let mut du = [0.0; 15];
-    let mut dv = [0.0; 15];
-    for (k, &(i, j)) in MONOMIALS.iter().enumerate() {
-        if i > 0 {
-            du[k] = f64::from(i) * u.powi(i - 1) * v.powi(j);
-        }
-        if j > 0 {
-            dv[k] = f64::from(j) * u.powi(i) * v.powi(j - 1);
-        }
-    }
+    let (u2, v2, uv) = (u * u, v * v, u * v);
+    let du = [
+        0.0,
+        1.0,
+        0.0,
+        2.0 * u,
+        v,
+        0.0,
+        3.0 * u2,
+        2.0 * uv,
+        v2,
+        0.0,
+        4.0 * u2 * u,
+        3.0 * u2 * v,
+        2.0 * u * v2,
+        v2 * v,
+        0.0,
+    ];
+    let dv = [
+        0.0,
+        0.0,
+        1.0,
+        0.0,
+        u,
+        2.0 * v,
+        0.0,
+        u2,
+        2.0 * uv,
+        3.0 * v2,
+        0.0,
+        u2 * u,
+        2.0 * u2 * v,
+        3.0 * u * v2,
+        4.0 * v2 * v,
+    ];
     (du, dv)
 }
 

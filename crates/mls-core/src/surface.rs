@@ -159,6 +159,7 @@ impl MlsSurface {
             line: Vec::new(),
             offsets: Vec::new(),
             ladder: Vec::new(),
+            jet_scratch: jet::JetScratch::default(),
         }
     }
 
@@ -326,6 +327,7 @@ pub struct Evaluator<'a> {
     offsets: Vec<Sample>,
     /// The jet's fits up the ladder of scales at one query.
     ladder: Vec<JetPoint>,
+    jet_scratch: jet::JetScratch,
 }
 
 impl Evaluator<'_> {
@@ -378,8 +380,14 @@ impl Evaluator<'_> {
                 point: Point::from(s.point - local),
                 normal: s.normal,
             }));
-            let Some(fit) = jet::fit(&self.offsets, &frame, radius, config.degree, config.normals)
-            else {
+            let Some(fit) = jet::fit(
+                &self.offsets,
+                &frame,
+                radius,
+                config.degree,
+                config.normals,
+                &mut self.jet_scratch,
+            ) else {
                 if best.is_some() {
                     break;
                 }
