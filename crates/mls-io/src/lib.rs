@@ -40,7 +40,7 @@ pub use error::{ReadError, WriteError};
 pub use text::{read_csv, read_xyz};
 pub use write::{
     Axis, Column, ColumnData, PlyFormat, write_csv, write_csv_to, write_ply, write_ply_to,
-    write_point_cloud, write_xyz, write_xyz_to,
+    write_point_cloud, write_point_cloud_as, write_point_cloud_to, write_xyz, write_xyz_to,
 };
 
 /// The fields the readers look for, in the order of the slots of a row.
@@ -95,7 +95,8 @@ impl PointCloud {
 pub enum FileFormat {
     /// `.ply`: PLY, ASCII or binary.
     Ply,
-    /// `.xyz`, `.txt`, `.pts`: whitespace-separated columns without a header.
+    /// `.xyz`, `.txt`, `.pts`: whitespace-separated columns, `#` comment lines (the writers put
+    /// the column names in one).
     Xyz,
     /// `.csv`: comma-separated columns with a header row.
     Csv,
@@ -128,15 +129,35 @@ fn detect_format(path: &Path) -> Result<FileFormat, Option<String>> {
 /// `.ply` ([`read_ply`]), `.xyz`, `.txt`, `.pts` ([`read_xyz`]) or `.csv` ([`read_csv`]).
 ///
 /// # Errors
-/// [`ReadError::NoExtension`] or [`ReadError::UnknownExtension`] before the file is opened,
-/// [`ReadError::Io`] if it cannot be opened or read, and those of the reader.
+/// [`ReadError::IsADirectory`], [`ReadError::NoExtension`] or [`ReadError::UnknownExtension`]
+/// before the file is opened, [`ReadError::Io`] if it cannot be opened or read, and those of
+/// the reader.
 pub fn read_point_cloud(path: &Path) -> Result<PointCloud, ReadError> {
     let file = path.display().to_string();
+    // Checked first: a directory usually has no extension, and "no file extension" would send
+    // the user looking for the wrong mistake (on Linux a directory even opens, and only the
+    // first read fails).
+    if path.is_dir() {
+        return Err(ReadError::IsADirectory { file });
+    }
     let format = match detect_format(path) {
         Ok(format) => format,
         Err(None) => return Err(ReadError::NoExtension { file }),
         Err(Some(extension)) => return Err(ReadError::UnknownExtension { file, extension }),
     };
+    read_point_cloud_as(path, format)
+}
+
+/// Reads a point cloud in the given format, whatever the file's extension.
+///
+/// # Errors
+/// [`ReadError::IsADirectory`], [`ReadError::Io`] if the file cannot be opened or read, and
+/// those of the reader.
+pub fn read_point_cloud_as(path: &Path, format: FileFormat) -> Result<PointCloud, ReadError> {
+    let file = path.display().to_string();
+    if path.is_dir() {
+        return Err(ReadError::IsADirectory { file });
+    }
     let opened = File::open(path).map_err(|error| ReadError::Io {
         file: file.clone(),
         error,
@@ -147,6 +168,23 @@ pub fn read_point_cloud(path: &Path) -> Result<PointCloud, ReadError> {
         FileFormat::Ply => ply::read(reader, &file, size),
         FileFormat::Xyz => read_xyz(reader, &file),
         FileFormat::Csv => read_csv(reader, &file),
+    }
+}
+
+/// Reads a point cloud in the given format from a stream, such as standard input; `name` is
+/// the display name used in errors.
+///
+/// # Errors
+/// Those of [`read_ply`], [`read_xyz`] or [`read_csv`].
+pub fn read_point_cloud_from(
+    reader: impl BufRead,
+    name: &str,
+    format: FileFormat,
+) -> Result<PointCloud, ReadError> {
+    match format {
+        FileFormat::Ply => read_ply(reader, name),
+        FileFormat::Xyz => read_xyz(reader, name),
+        FileFormat::Csv => read_csv(reader, name),
     }
 }
 
