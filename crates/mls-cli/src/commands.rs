@@ -302,7 +302,7 @@ fn eval_with(a: &EvalArgs, output: &pipeline::Output) -> Result<()> {
         )
     })?;
     let h = scale.h;
-    pipeline::check_scale(&points, h, a.cutoff, &cloud_name)?;
+    pipeline::check_scale(&points, &scale, a.cutoff, &cloud_name)?;
     let normals: Vec<Vector> = file_normals.iter().map(|n| Vector::from(*n)).collect();
     let surface = t.time("index", || {
         MlsSurface::new(

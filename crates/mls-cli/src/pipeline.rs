@@ -297,6 +297,8 @@ pub struct Scale {
     /// or `given with --h`.
     pub why: String,
     pub spacing: Option<SpacingStats>,
+    /// The multiple of the spacing, if h was derived from it.
+    pub factor: Option<f64>,
 }
 
 impl Scale {
@@ -325,7 +327,8 @@ const SLOW_SUPPORT: f64 = 10_000.0;
 /// results would look fine) when the kernel's weight spans most of the cloud, or when its
 /// support holds so many samples that the run will be slow. At h = 1000 on the 0.25 m bunny
 /// every point came out "ok", with k ≈ 1e-6, after a run 300 times longer than usual.
-pub fn check_scale(points: &[Point], h: f64, cutoff: Cutoff, file: &str) -> Result<()> {
+pub fn check_scale(points: &[Point], scale: &Scale, cutoff: Cutoff, file: &str) -> Result<()> {
+    let h = scale.h;
     let Some(first) = points.first() else {
         return Ok(());
     };
@@ -381,9 +384,19 @@ pub fn check_scale(points: &[Point], h: f64, cutoff: Cutoff, file: &str) -> Resu
     }
     if let Some(w) = warnings.first_mut() {
         w.push_str(
-            "; the curvature will be that of an overall smoothed shape, not of local detail; \
-             `mlscurv info` suggests an h",
+            "; the curvature will be that of an overall smoothed shape, not of local detail",
         );
+        // With the default factor, h is what `info` would suggest: the cloud is then too
+        // small for local detail, and saying "choose another h" would be no help.
+        match scale.factor {
+            None => w.push_str("; `mlscurv info` suggests an h"),
+            Some(f) if f > mls_core::normals::DEFAULT_H_FACTOR => {
+                w.push_str(&format!(
+                    "; a smaller --h-factor than {f} gives a smaller h"
+                ));
+            }
+            Some(_) => w.push_str("; the cloud has too few points for a local fit"),
+        }
     }
     if per_point > SLOW_SUPPORT {
         warnings.push(format!(
@@ -413,6 +426,7 @@ pub fn choose_h(
             h,
             why: "given with --h".into(),
             spacing: None,
+            factor: None,
         });
     }
     let stats = spacing_statistics(points, DEFAULT_SPACING_NEIGHBOURS, par)
@@ -426,6 +440,7 @@ pub fn choose_h(
             stats.spacing, stats.k
         ),
         spacing: Some(stats),
+        factor: Some(factor),
     })
 }
 
@@ -559,7 +574,7 @@ pub fn prepare<S>(
     let scale = t.time("spacing", || {
         choose_h(&points, s.scale.h, s.scale.h_factor, par, input)
     })?;
-    check_scale(&points, scale.h, s.cutoff, &input_name(input))?;
+    check_scale(&points, &scale, s.cutoff, &input_name(input))?;
     let Normals { normals, source } = t.time("normals", || {
         normals(
             file_normals,

@@ -89,6 +89,7 @@ fn h_beyond_the_cloud_or_a_kernel_holding_most_of_it_is_warned_about_even_when_q
             assert_eq!(w.len(), 1, "h = {h}, quiet {quiet}:\n{}", r.stderr);
             assert!(w[0].contains(says), "{}", w[0]);
             assert!(w[0].contains("overall smoothed shape"), "{}", w[0]);
+            assert!(w[0].ends_with("`mlscurv info` suggests an h"), "{}", w[0]);
             assert!(w[0].contains("in.xyz"), "{}", w[0]);
             assert_eq!(r.stderr.contains("points read"), !quiet, "{}", r.stderr);
         }
@@ -105,6 +106,30 @@ fn default_h_on_a_small_cloud_gives_no_warning() {
     let r = curvature(&input, &dir.path().join("out.csv"), &["--quiet"]);
     assert!(r.success, "{}", r.stderr);
     assert_eq!(r.stderr, "");
+}
+
+/// The advice follows where h came from: on a cloud too small for a local fit the default h
+/// already is the suggested one, and a large --h-factor is named.
+#[test]
+fn the_advice_follows_where_h_came_from() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("five.xyz");
+    std::fs::write(&input, "0 0 0\n1 0 0\n0 1 0\n1 1 0\n2 2 0\n").unwrap();
+    let out = dir.path().join("out.csv");
+    for (extra, advice) in [
+        (&["-q"][..], "the cloud has too few points for a local fit"),
+        (
+            &["-q", "--h-factor", "3"][..],
+            "a smaller --h-factor than 3 gives a smaller h",
+        ),
+    ] {
+        let r = curvature(&input, &out, extra);
+        assert!(r.success, "{}", r.stderr);
+        let w = warnings(&r);
+        assert_eq!(w.len(), 1, "{extra:?}: {}", r.stderr);
+        assert!(w[0].contains("exceeds the cloud's extent"), "{}", w[0]);
+        assert!(w[0].ends_with(advice), "{}", w[0]);
+    }
 }
 
 /// Without a cutoff every evaluation visits every sample: on 12,000 points that is slow enough to
