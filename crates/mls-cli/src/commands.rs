@@ -287,7 +287,7 @@ fn eval_with(a: &EvalArgs, output: &pipeline::Output) -> Result<()> {
             "{cloud_name}: the cloud has no normals (nx, ny, nz); eval needs an oriented cloud"
         );
     };
-    let queries = t.time("read", || {
+    let queries = t.time("read queries", || {
         pipeline::read_any(&a.queries, a.formats.input_format)
     })?;
     let points = pipeline::to_points(&cloud);
