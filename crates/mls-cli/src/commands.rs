@@ -1,12 +1,14 @@
 //! The subcommands.
 
+use std::fmt::Write as _;
+
 use anyhow::{Context, Result};
 use mls_core::normals::{DEFAULT_NEIGHBOURS, NeighbourGraph, orientation_consistency};
 use mls_core::{
     AdaptiveConfig, AdaptiveSurface, Curvature, JetConfig, JetPoint, Location, MlsConfig,
     MlsSurface, NormalData, Parallelism, Point, PointStatus, Vector,
 };
-use mls_io::{Axis, Column, PlyFormat};
+use mls_io::{Axis, Column};
 
 use crate::pipeline::{self, Prepared, Surface, Timings};
 use crate::{
@@ -15,14 +17,6 @@ use crate::{
 };
 
 const NAN3: [f64; 3] = [f64::NAN; 3];
-
-fn ply_format(ascii: bool) -> PlyFormat {
-    if ascii {
-        PlyFormat::Ascii
-    } else {
-        PlyFormat::BinaryLittleEndian
-    }
-}
 
 /// Vector columns `px py pz` for a prefix `p` (`"n"` gives `nx ny nz`).
 fn vector_columns<'a>(names: [&'a str; 3], v: &'a [[f64; 3]]) -> [Column<'a>; 3] {
@@ -98,7 +92,7 @@ impl CurvatureColumns {
 }
 
 pub fn curvature(a: CurvatureArgs) -> Result<()> {
-    pipeline::check_output(&a.input, &a.out.output)?;
+    let output = pipeline::output(&[&a.input], &a.out)?;
     if a.adaptive && a.method == Method::Jet {
         anyhow::bail!(
             "--adaptive is the per-point scale of --method paper; the default jet method chooses \
@@ -115,20 +109,26 @@ pub fn curvature(a: CurvatureArgs) -> Result<()> {
             normals_source,
             normals_from_file,
             surface,
-        } = pipeline::prepare(&a.input, s, &mut t, |p, n, h, cutoff| {
-            Ok(if a.adaptive {
-                let config = AdaptiveConfig {
-                    surface: MlsConfig {
-                        cutoff,
-                        ..MlsConfig::new(h)
-                    },
-                    ..AdaptiveConfig::new(h)
-                };
-                Surface::Adaptive(AdaptiveSurface::new(p, n, &config)?)
-            } else {
-                Surface::Fixed(pipeline::fixed_surface(p, n, h, cutoff)?)
-            })
-        })?;
+        } = pipeline::prepare(
+            &a.input,
+            a.out.formats.input_format,
+            s,
+            &mut t,
+            |p, n, h, cutoff| {
+                Ok(if a.adaptive {
+                    let config = AdaptiveConfig {
+                        surface: MlsConfig {
+                            cutoff,
+                            ..MlsConfig::new(h)
+                        },
+                        ..AdaptiveConfig::new(h)
+                    };
+                    Surface::Adaptive(AdaptiveSurface::new(p, n, &config)?)
+                } else {
+                    Surface::Fixed(pipeline::fixed_surface(p, n, h, cutoff)?)
+                })
+            },
+        )?;
         let label = match a.at {
             At::Input => "curvature",
             At::Projected => "projection",
@@ -220,23 +220,21 @@ pub fn curvature(a: CurvatureArgs) -> Result<()> {
             columns.push(Column::f64("k2_sd", &out.k2_sd));
         }
         columns.push(Column::i32("status", &out.status));
-        t.time("write", || {
-            mls_io::write_point_cloud(&a.out.output, &columns, ply_format(a.out.ascii))
-        })?;
+        t.time("write", || output.write(&columns, a.out.ascii))?;
         if !s.run.quiet {
-            eprintln!("mlscurv curvature: {}", a.input.display());
+            eprintln!("mlscurv curvature: {}", pipeline::input_name(&a.input));
             eprintln!("  points read     {n}");
             if a.adaptive {
                 eprintln!(
-                    "  h               adaptive, per point from {:.6} ({}) to {:.6}",
+                    "  h               adaptive, per point from {:.6} to {:.6}",
                     scale.h,
-                    scale.why,
                     AdaptiveConfig::new(scale.h).h_max()
                 );
+                eprintln!("  smallest h      {}", scale.describe(H_OPTIONS));
                 eprintln!("  chosen h        {}", pipeline::percentiles(&out.h));
                 eprintln!("  noise estimate  {}", pipeline::percentiles(&out.noise));
             } else {
-                eprintln!("  h               {:.6} = {}", scale.h, scale.why);
+                eprintln!("  h               {}", scale.describe(H_OPTIONS));
             }
             match a.method {
                 Method::Jet => eprintln!(
@@ -273,11 +271,14 @@ pub fn curvature(a: CurvatureArgs) -> Result<()> {
                 eprintln!("  k1 predicted sd {}", pipeline::percentiles(&out.k1_sd));
             }
             print_timings(&t, n);
-            eprintln!("  wrote           {}", a.out.output.display());
+            eprintln!("  wrote           {}", output.name());
         }
         Ok(())
     })
 }
+
+/// The options that set h, for the summaries.
+const H_OPTIONS: &str = "--h or --h-factor";
 
 fn cutoff_text(c: mls_core::Cutoff) -> String {
     match c {
@@ -300,41 +301,82 @@ fn print_timings(t: &Timings, n: usize) {
 }
 
 pub fn eval(a: EvalArgs) -> Result<()> {
-    let cloud = pipeline::read(&a.cloud, a.columns.as_ref())?;
+    let output = match &a.output {
+        Some(path) => pipeline::check_output(
+            &[&a.cloud, &a.queries],
+            path,
+            a.formats.output_format,
+            a.force,
+            false,
+            None,
+        )?,
+        None => pipeline::Output::Stdout(
+            a.formats
+                .output_format
+                .map_or(mls_io::FileFormat::Csv, Into::into),
+        ),
+    };
+    if output.format() == mls_io::FileFormat::Ply
+        && matches!(output, pipeline::Output::Stdout(_))
+        && std::io::IsTerminal::is_terminal(&std::io::stdout())
+    {
+        anyhow::bail!(
+            "{}: refusing to write binary PLY to a terminal; redirect it",
+            pipeline::STDOUT_NAME
+        );
+    }
+    if pipeline::input_name(&a.cloud) == pipeline::input_name(&a.queries)
+        && pipeline::input_name(&a.cloud) == pipeline::STDIN_NAME
+    {
+        anyhow::bail!(
+            "{}: --cloud and --queries cannot both be standard input",
+            pipeline::STDIN_NAME
+        );
+    }
+    pipeline::with_threads(a.run.threads, || eval_with(&a, &output))
+}
+
+fn eval_with(a: &EvalArgs, output: &pipeline::Output) -> Result<()> {
+    let mut t = Timings::default();
+    let cloud_name = pipeline::input_name(&a.cloud);
+    let cloud = t.time("read", || {
+        pipeline::read(&a.cloud, a.formats.input_format, a.columns.as_ref())
+    })?;
     let Some(file_normals) = &cloud.normals else {
         anyhow::bail!(
-            "{}: the cloud has no normals (nx, ny, nz); eval needs an oriented cloud",
-            a.cloud.display()
+            "{cloud_name}: the cloud has no normals (nx, ny, nz); eval needs an oriented cloud"
         );
     };
-    let queries = mls_io::read_point_cloud(&a.queries)?;
+    let queries = t.time("read queries", || {
+        pipeline::read_quietly(&a.queries, a.formats.input_format)
+    })?;
     let points = pipeline::to_points(&cloud);
     let par = Parallelism::Rayon;
-    let h = match a.h {
-        Some(h) => h,
-        None => {
-            pipeline::choose_h(
-                &points,
-                None,
-                mls_core::normals::DEFAULT_H_FACTOR,
-                par,
-                &a.cloud,
-            )?
-            .h
-        }
-    };
+    let scale = t.time("spacing", || {
+        pipeline::choose_h(
+            &points,
+            a.h,
+            mls_core::normals::DEFAULT_H_FACTOR,
+            par,
+            &a.cloud,
+        )
+    })?;
+    let h = scale.h;
+    pipeline::check_scale(&points, &scale, a.cutoff, &cloud_name)?;
     let normals: Vec<Vector> = file_normals.iter().map(|n| Vector::from(*n)).collect();
-    let surface = MlsSurface::new(
-        &points,
-        &normals,
-        MlsConfig {
-            cutoff: a.cutoff,
-            ..MlsConfig::new(h)
-        },
-    )
-    .with_context(|| format!("{}", a.cloud.display()))?;
+    let surface = t.time("index", || {
+        MlsSurface::new(
+            &points,
+            &normals,
+            MlsConfig {
+                cutoff: a.cutoff,
+                ..MlsConfig::new(h)
+            },
+        )
+        .with_context(|| cloud_name.clone())
+    })?;
     let q: Vec<Point> = queries.points.iter().map(|p| Point::from(*p)).collect();
-    let results = surface.curvature_at_points(&q, par);
+    let results = t.time("evaluation", || surface.curvature_at_points(&q, par));
     const NAMES: [&str; 21] = [
         "x", "y", "z", "g", "gx", "gy", "gz", "hxx", "hxy", "hxz", "hyy", "hyz", "hzz", "nx", "ny",
         "nz", "k1", "k2", "mean", "gauss", "status",
@@ -393,23 +435,32 @@ pub fn eval(a: EvalArgs) -> Result<()> {
         .map(|(name, c)| Column::f64(name, c))
         .collect();
     columns.push(Column::i32("status", &status));
-    match &a.output {
-        Some(path) => {
-            pipeline::check_output(&a.cloud, path)?;
-            pipeline::check_output(&a.queries, path)?;
-            mls_io::write_csv(path, &columns)?;
-        }
-        None => mls_io::write_csv_to(std::io::stdout().lock(), "<stdout>", &columns)?,
+    t.time("write", || output.write(&columns, false))?;
+    if !a.run.quiet {
+        eprintln!("mlscurv eval: {cloud_name}");
+        eprintln!("  points read     {}", points.len());
+        eprintln!(
+            "  queries         {} from {}",
+            q.len(),
+            pipeline::input_name(&a.queries)
+        );
+        eprintln!("  h               {}", scale.describe("--h"));
+        eprintln!("  cutoff          {}", cutoff_text(a.cutoff));
+        eprintln!("  status          {}", pipeline::status_counts(&status));
+        print_timings(&t, q.len());
+        eprintln!("  wrote           {}", output.name());
     }
     Ok(())
 }
 
 pub fn normals(a: NormalsArgs) -> Result<()> {
-    pipeline::check_output(&a.input, &a.out.output)?;
+    let output = pipeline::output(&[&a.input], &a.out)?;
     pipeline::with_threads(a.run.threads, || {
         let mut t = Timings::default();
         let par = Parallelism::Rayon;
-        let cloud = t.time("read", || pipeline::read(&a.input, a.columns.as_ref()))?;
+        let cloud = t.time("read", || {
+            pipeline::read(&a.input, a.out.formats.input_format, a.columns.as_ref())
+        })?;
         let points = pipeline::to_points(&cloud);
         let scale = t.time("spacing", || {
             pipeline::choose_h(&points, a.scale.h, a.scale.h_factor, par, &a.input)
@@ -445,31 +496,30 @@ pub fn normals(a: NormalsArgs) -> Result<()> {
         let mut columns = Vec::new();
         columns.extend(vector_columns(["x", "y", "z"], &cloud.points));
         columns.extend(vector_columns(["nx", "ny", "nz"], &nrm));
-        // XYZ files have no header: keep them to the 6 columns every tool reads back.
-        if mls_io::FileFormat::from_path(&a.out.output) != Some(mls_io::FileFormat::Xyz) {
+        // Many XYZ readers take only 3 or 6 columns: keep XYZ output to the 6 every tool reads
+        // back.
+        if output.format() != mls_io::FileFormat::Xyz {
             columns.push(Column::i32("status", &status));
         }
-        t.time("write", || {
-            mls_io::write_point_cloud(&a.out.output, &columns, ply_format(a.out.ascii))
-        })?;
+        t.time("write", || output.write(&columns, a.out.ascii))?;
         if !a.run.quiet {
-            eprintln!("mlscurv normals: {}", a.input.display());
+            eprintln!("mlscurv normals: {}", pipeline::input_name(&a.input));
             eprintln!("  points read     {}", points.len());
-            eprintln!("  h               {:.6} = {}", scale.h, scale.why);
+            eprintln!("  h               {}", scale.describe(H_OPTIONS));
             eprintln!("  normals         {}", est.source);
             eprintln!(
                 "  status          {} (failed normals are written as 0 0 0)",
                 pipeline::status_counts(&status)
             );
             print_timings(&t, points.len());
-            eprintln!("  wrote           {}", a.out.output.display());
+            eprintln!("  wrote           {}", output.name());
         }
         Ok(())
     })
 }
 
 pub fn project(a: ProjectArgs) -> Result<()> {
-    pipeline::check_output(&a.input, &a.out.output)?;
+    let output = pipeline::output(&[&a.input], &a.out)?;
     let s = &a.surface;
     pipeline::with_threads(s.run.threads, || {
         let mut t = Timings::default();
@@ -480,7 +530,13 @@ pub fn project(a: ProjectArgs) -> Result<()> {
             normals_source,
             surface,
             ..
-        } = pipeline::prepare(&a.input, s, &mut t, pipeline::fixed_surface)?;
+        } = pipeline::prepare(
+            &a.input,
+            a.out.formats.input_format,
+            s,
+            &mut t,
+            pipeline::fixed_surface,
+        )?;
         let n = points.len();
         let mut nrm = Vec::with_capacity(n);
         let mut status = Vec::with_capacity(n);
@@ -510,18 +566,16 @@ pub fn project(a: ProjectArgs) -> Result<()> {
         columns.extend(vector_columns(["x", "y", "z"], &pos));
         columns.extend(vector_columns(["nx", "ny", "nz"], &nrm));
         columns.push(Column::i32("status", &status));
-        t.time("write", || {
-            mls_io::write_point_cloud(&a.out.output, &columns, ply_format(a.out.ascii))
-        })?;
+        t.time("write", || output.write(&columns, a.out.ascii))?;
         if !s.run.quiet {
-            eprintln!("mlscurv project: {}", a.input.display());
+            eprintln!("mlscurv project: {}", pipeline::input_name(&a.input));
             eprintln!("  points read     {n}");
-            eprintln!("  h               {:.6} = {}", scale.h, scale.why);
+            eprintln!("  h               {}", scale.describe(H_OPTIONS));
             eprintln!("  normals         {normals_source}");
             eprintln!("  status          {}", pipeline::status_counts(&status));
             eprintln!("  displacement    {}", pipeline::percentiles(&moved));
             print_timings(&t, n);
-            eprintln!("  wrote           {}", a.out.output.display());
+            eprintln!("  wrote           {}", output.name());
         }
         Ok(())
     })
@@ -532,9 +586,24 @@ fn dist(a: &[f64; 3], b: &[f64; 3]) -> f64 {
 }
 
 pub fn info(a: InfoArgs) -> Result<()> {
-    let cloud = pipeline::read_noted(&a.input, a.columns.as_ref())?;
+    // The report is collected and written at once: `println!` panics when the reader of a pipe
+    // (`mlscurv info x.ply | head -3`) has gone.
+    let mut out = String::new();
+    let result = info_report(&a, &mut out);
+    pipeline::write_stdout(out.as_bytes())?;
+    result
+}
+
+fn info_report(a: &InfoArgs, out: &mut String) -> Result<()> {
+    // Writing to a String cannot fail.
+    macro_rules! println {
+        ($($arg:tt)*) => {{
+            let _ = writeln!(out, $($arg)*);
+        }};
+    }
+    let cloud = pipeline::read_any(&a.input, a.input_format, a.columns.as_ref())?;
     let points = pipeline::to_points(&cloud);
-    println!("file            {}", a.input.display());
+    println!("file            {}", pipeline::input_name(&a.input));
     println!("points          {}", points.len());
     if points.is_empty() {
         return Ok(());
@@ -568,7 +637,7 @@ pub fn info(a: InfoArgs) -> Result<()> {
                 );
                 println!("duplicates      {}", s.duplicates);
             }
-            println!("suggested h     {:.6} ({})", scale.h, scale.why);
+            println!("suggested h     {:.6} = {}", scale.h, scale.why);
         }
         Err(e) => println!("spacing         unavailable: {e:#}"),
     }

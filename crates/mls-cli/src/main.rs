@@ -5,14 +5,14 @@ use std::io::IsTerminal as _;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use clap::{Args, Parser, Subcommand, ValueEnum};
+use clap::{ArgAction, Args, CommandFactory as _, FromArgMatches as _, Subcommand, ValueEnum};
 use mls_core::PointStatus;
 
 mod commands;
 mod pipeline;
 mod progress;
 
-#[derive(Debug, Parser)]
+#[derive(Debug, clap::Parser)]
 #[command(
     name = "mlscurv",
     version,
@@ -92,7 +92,7 @@ struct RunArgs {
     /// Worker threads (default: all cores).
     #[arg(long, value_parser = clap::value_parser!(u16).range(1..))]
     threads: Option<u16>,
-    /// No summary or progress on stderr.
+    /// No summary or progress on stderr (warnings and errors are still printed).
     #[arg(long, short)]
     quiet: bool,
 }
@@ -135,19 +135,60 @@ const COLUMNS_HELP: &str = "Names of the columns of a text input (.xyz/.txt/.pts
     other names skipped. Without it, columns 4-6 of a headerless file are normals only if they \
     are unit vectors on every row";
 
+/// The output file, and the formats of the input and output.
 #[derive(Debug, Args)]
 struct OutputArgs {
-    /// Output file: .ply (binary little endian unless --ascii), .csv, .xyz/.txt.
+    /// Output file: .ply (binary little endian unless --ascii), .csv, .xyz/.txt/.pts; `-` for
+    /// standard output (CSV unless --output-format).
     #[arg(short, long)]
     output: PathBuf,
     /// Write PLY as ASCII.
     #[arg(long)]
     ascii: bool,
+    /// Replace the output file even if it is read-only (it keeps its permissions).
+    #[arg(long)]
+    force: bool,
+    #[command(flatten)]
+    formats: FormatArgs,
+}
+
+/// Formats named on the command line, for standard streams and unusual extensions.
+#[derive(Debug, Args)]
+struct FormatArgs {
+    /// Format of the input, overriding its extension: needed for a file with another
+    /// extension; for `-` (standard input) the format is otherwise recognised from the data.
+    #[arg(long, value_enum)]
+    input_format: Option<Format>,
+    /// Format of the output: for `-o -` (default csv); for a file it must agree with the
+    /// extension if the extension names a format.
+    #[arg(long, value_enum)]
+    output_format: Option<Format>,
+}
+
+/// A point-cloud file format.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+enum Format {
+    /// PLY (ASCII or binary).
+    Ply,
+    /// Whitespace-separated columns (.xyz, .txt, .pts).
+    Xyz,
+    /// Comma-separated columns with a header row.
+    Csv,
+}
+
+impl From<Format> for mls_io::FileFormat {
+    fn from(f: Format) -> Self {
+        match f {
+            Format::Ply => Self::Ply,
+            Format::Xyz => Self::Xyz,
+            Format::Csv => Self::Csv,
+        }
+    }
 }
 
 #[derive(Debug, Args)]
 struct CurvatureArgs {
-    /// Input point cloud: .ply, .xyz/.txt/.pts, or .csv with a header.
+    /// Input point cloud: .ply, .xyz/.txt/.pts, or .csv with a header; `-` for standard input.
     input: PathBuf,
     #[command(flatten)]
     out: OutputArgs,
@@ -177,8 +218,9 @@ struct EvalArgs {
     /// Names of the columns of the cloud, when it is a text file (see `curvature --help`).
     #[arg(long, value_parser = mls_io::ColumnNames::parse)]
     columns: Option<mls_io::ColumnNames>,
-    /// The query points (any supported format; normals in it are ignored).
-    #[arg(long = "at")]
+    /// The query points (any supported format, `-` for standard input; normals in it are
+    /// ignored). `--at` is a deprecated spelling.
+    #[arg(long, alias = "at")]
     queries: PathBuf,
     /// Gaussian scale h. Default: 2 × the point spacing of the cloud.
     #[arg(long, value_parser = positive_finite, allow_negative_numbers = true)]
@@ -186,14 +228,22 @@ struct EvalArgs {
     /// Kernel cutoff radius in units of h, or `none`.
     #[arg(long, value_parser = parse_cutoff, default_value = "5", allow_negative_numbers = true)]
     cutoff: mls_core::Cutoff,
-    /// Output CSV; standard output when absent.
+    /// Output file (.csv, .ply, .xyz/.txt/.pts, by extension); standard output (CSV unless
+    /// --output-format) when absent or `-`.
     #[arg(short, long)]
     output: Option<PathBuf>,
+    /// Replace the output file even if it is read-only (it keeps its permissions).
+    #[arg(long)]
+    force: bool,
+    #[command(flatten)]
+    formats: FormatArgs,
+    #[command(flatten)]
+    run: RunArgs,
 }
 
 #[derive(Debug, Args)]
 struct NormalsArgs {
-    /// Input point cloud.
+    /// Input point cloud; `-` for standard input.
     input: PathBuf,
     #[command(flatten)]
     out: OutputArgs,
@@ -210,7 +260,7 @@ struct NormalsArgs {
 
 #[derive(Debug, Args)]
 struct ProjectArgs {
-    /// Input point cloud.
+    /// Input point cloud; `-` for standard input.
     input: PathBuf,
     #[command(flatten)]
     out: OutputArgs,
@@ -220,10 +270,13 @@ struct ProjectArgs {
 
 #[derive(Debug, Args)]
 struct InfoArgs {
-    /// Input point cloud.
+    /// Input point cloud; `-` for standard input.
     input: PathBuf,
     #[arg(long, value_parser = mls_io::ColumnNames::parse, help = COLUMNS_HELP)]
     columns: Option<mls_io::ColumnNames>,
+    /// Format of the input, overriding its extension (see `curvature --help`).
+    #[arg(long, value_enum)]
+    input_format: Option<Format>,
 }
 
 fn positive_finite(s: &str) -> Result<f64, String> {
@@ -284,8 +337,72 @@ fn interactive(quiet: bool) -> bool {
     !quiet && std::io::stderr().is_terminal()
 }
 
+/// The help option: `--help` only. `-h` is refused with a pointer to `--h` and `--help` (see
+/// [`refuse_short_h`]), because `curvature -h 0.01 …` printing help and exiting 0 looked like
+/// success to scripts that meant the scale.
+fn help_arg() -> clap::Arg {
+    clap::Arg::new("help")
+        .long("help")
+        .action(ArgAction::Help)
+        .help("Print help")
+}
+
+/// Exits with a usage error (status 2) if an argument is `-h`, `-hVALUE` or `-h=VALUE`: the
+/// scale is `--h`, help is `--help`. Arguments after `--` are operands and not looked at.
+fn refuse_short_h(cmd: &mut clap::Command, args: &[std::ffi::OsString]) {
+    let mut subcommand = None;
+    for arg in args.iter().skip(1) {
+        let Some(arg) = arg.to_str() else { continue };
+        if arg == "--" {
+            break;
+        }
+        if subcommand.is_none() && cmd.find_subcommand(arg).is_some() {
+            subcommand = Some(arg.to_owned());
+        }
+        if arg.starts_with("-h") {
+            let (name, has_scale) = match &subcommand {
+                Some(name) => {
+                    let has_scale = cmd
+                        .find_subcommand(name)
+                        .is_some_and(|c| c.get_arguments().any(|a| a.get_long() == Some("h")));
+                    (format!("mlscurv {name}"), has_scale)
+                }
+                None => ("mlscurv".to_owned(), false),
+            };
+            let scale = if has_scale {
+                "the Gaussian scale is `--h H` (two dashes) and "
+            } else {
+                ""
+            };
+            let message = format!("`{arg}` is not an option of `{name}`: {scale}help is `--help`");
+            // The subcommand's own usage line, which `build` has given its full name.
+            cmd.build();
+            let mut target = subcommand
+                .as_deref()
+                .and_then(|name| cmd.find_subcommand(name))
+                .unwrap_or(cmd)
+                .clone();
+            target
+                .error(clap::error::ErrorKind::UnknownArgument, message)
+                .exit();
+        }
+    }
+}
+
 fn main() -> ExitCode {
-    let cli = Cli::parse();
+    let mut cmd = Cli::command()
+        .disable_help_flag(true)
+        .arg(help_arg())
+        .mut_subcommands(|c| c.disable_help_flag(true).arg(help_arg()));
+    let args: Vec<std::ffi::OsString> = std::env::args_os().collect();
+    refuse_short_h(&mut cmd, &args);
+    let cli = match cmd
+        .try_get_matches_from_mut(&args)
+        .and_then(|m| Cli::from_arg_matches(&m))
+    {
+        Ok(cli) => cli,
+        Err(e) => e.format(&mut cmd).exit(),
+    };
     let result = match cli.command {
         Command::Curvature(a) => commands::curvature(a),
         Command::Eval(a) => commands::eval(a),

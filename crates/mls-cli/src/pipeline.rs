@@ -1,9 +1,10 @@
 //! Shared steps: read and check the input, choose h, get oriented normals, build the surface.
 
-use std::path::Path;
+use std::io::{IsTerminal as _, Read as _};
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use anyhow::{Context, Result, bail};
+use anyhow::{Context, Result, anyhow, bail};
 use mls_core::normals::{
     DEFAULT_NEIGHBOURS, DEFAULT_SPACING_NEIGHBOURS, NormalsConfig, Orientation, SpacingStats,
     estimate_normals, spacing_statistics, suggest_h,
@@ -12,9 +13,9 @@ use mls_core::{
     AdaptiveSurface, ConfigError, Cutoff, MlsConfig, MlsSurface, Parallelism, Point, PointStatus,
     Vector,
 };
-use mls_io::PointCloud;
+use mls_io::{Column, FileFormat, PlyFormat, PointCloud, ReadError};
 
-use crate::{NormalsMode, SurfaceArgs};
+use crate::{Format, NormalsMode, OutputArgs, SurfaceArgs};
 
 /// The smallest cloud a neighbourhood can be built from: a covariance normal needs 3 points
 /// besides the centre, the MLS evaluation at least 3 samples.
@@ -33,41 +34,285 @@ impl Timings {
     }
 }
 
-/// Reads a cloud (with the column names of `--columns`, if given) and prints the reader's
-/// notes on stderr, even with `--quiet`: they say how the columns were understood.
-pub fn read_noted(path: &Path, columns: Option<&mls_io::ColumnNames>) -> Result<PointCloud> {
-    let options = mls_io::ReadOptions {
-        columns: columns.cloned(),
-    };
-    let mls_io::ReadOutcome { cloud, notes } = mls_io::read_point_cloud_with(path, &options)?;
+/// The path that means standard input (as an input) or standard output (as `-o`).
+const STDIO: &str = "-";
+
+/// The name of standard input in messages.
+pub const STDIN_NAME: &str = "<stdin>";
+
+/// The name of standard output in messages.
+pub const STDOUT_NAME: &str = "<stdout>";
+
+fn is_stdio(path: &Path) -> bool {
+    path.as_os_str() == STDIO
+}
+
+/// How an input is named in messages: its path, or `<stdin>` for `-`.
+pub fn input_name(path: &Path) -> String {
+    if is_stdio(path) {
+        STDIN_NAME.to_owned()
+    } else {
+        path.display().to_string()
+    }
+}
+
+/// The name of a format on the command line.
+fn format_name(format: FileFormat) -> &'static str {
+    match format {
+        FileFormat::Ply => "ply",
+        FileFormat::Xyz => "xyz",
+        FileFormat::Csv => "csv",
+    }
+}
+
+/// Reads a cloud (see [`read_outcome`]) and prints the reader's notes on stderr, even with
+/// `--quiet`: they say how the columns were understood.
+pub fn read_any(
+    path: &Path,
+    format: Option<Format>,
+    columns: Option<&mls_io::ColumnNames>,
+) -> Result<PointCloud> {
+    let mls_io::ReadOutcome { cloud, notes } = read_outcome(path, format, columns)?;
     for note in notes {
         eprintln!("mlscurv: note: {note}");
     }
     Ok(cloud)
 }
 
-/// Reads a cloud as [`read_noted`] does and checks it has enough points.
-pub fn read(path: &Path, columns: Option<&mls_io::ColumnNames>) -> Result<PointCloud> {
-    let cloud = read_noted(path, columns)?;
+/// Reads a cloud whose columns beyond x, y, z do not matter (eval's queries), without the
+/// reader's notes.
+pub fn read_quietly(path: &Path, format: Option<Format>) -> Result<PointCloud> {
+    Ok(read_outcome(path, format, None)?.cloud)
+}
+
+/// Reads a cloud in `format` if given, else in the format its extension names; `-` reads
+/// standard input, whose format is otherwise recognised from the data. The column names of
+/// `--columns`, if given, name the columns of a text input, from a file or standard input.
+pub fn read_outcome(
+    path: &Path,
+    format: Option<Format>,
+    columns: Option<&mls_io::ColumnNames>,
+) -> Result<mls_io::ReadOutcome> {
+    let options = mls_io::ReadOptions {
+        columns: columns.cloned(),
+    };
+    Ok(if is_stdio(path) {
+        let stdin = std::io::stdin();
+        if stdin.is_terminal() {
+            bail!(
+                "{STDIN_NAME}: standard input is a terminal; pipe or redirect a point cloud into it"
+            );
+        }
+        let mut bytes = Vec::new();
+        stdin
+            .lock()
+            .read_to_end(&mut bytes)
+            .map_err(|e| anyhow!("{STDIN_NAME}: {e}"))?;
+        let format = format.map_or_else(|| sniff(&bytes), FileFormat::from);
+        mls_io::read_point_cloud_from_with(&bytes[..], STDIN_NAME, format, &options)?
+    } else {
+        match format {
+            Some(format) => mls_io::read_point_cloud_as_with(path, format.into(), &options)?,
+            None => mls_io::read_point_cloud_with(path, &options).map_err(|e| match e {
+                ReadError::NoExtension { .. } | ReadError::UnknownExtension { .. } => {
+                    anyhow!("{e}; or name the format with --input-format ply|xyz|csv")
+                }
+                e => e.into(),
+            })?,
+        }
+    })
+}
+
+/// The format of data without a file name: PLY by its magic word, else CSV if the first line
+/// that is not blank or a `#` comment has a comma (its header row), else XYZ.
+fn sniff(bytes: &[u8]) -> FileFormat {
+    if bytes.starts_with(b"ply") {
+        return FileFormat::Ply;
+    }
+    let first = bytes
+        .split(|&b| b == b'\n')
+        .map(<[u8]>::trim_ascii)
+        .find(|line| !line.is_empty() && !line.starts_with(b"#"));
+    match first {
+        Some(line) if line.contains(&b',') => FileFormat::Csv,
+        _ => FileFormat::Xyz,
+    }
+}
+
+/// Reads a cloud (see [`read_any`]) and checks it has enough points.
+pub fn read(
+    path: &Path,
+    format: Option<Format>,
+    columns: Option<&mls_io::ColumnNames>,
+) -> Result<PointCloud> {
+    let cloud = read_any(path, format, columns)?;
     if cloud.points.len() < MIN_POINTS {
         bail!(
             "{}: {} point(s); at least {MIN_POINTS} are needed to build a neighbourhood",
-            path.display(),
+            input_name(path),
             cloud.points.len()
         );
     }
     Ok(cloud)
 }
 
-/// Refuses to overwrite the input with the output.
-pub fn check_output(input: &Path, output: &Path) -> Result<()> {
-    if mls_io::same_file(input, output) {
-        bail!(
-            "{}: output path is the input file; refusing to overwrite it",
-            output.display()
-        );
+/// Where a command's table goes.
+#[derive(Debug)]
+pub enum Output {
+    /// A file, written atomically.
+    File(PathBuf, FileFormat),
+    /// Standard output (`-o -`).
+    Stdout(FileFormat),
+}
+
+impl Output {
+    pub fn format(&self) -> FileFormat {
+        match self {
+            Self::File(_, f) | Self::Stdout(f) => *f,
+        }
     }
-    Ok(())
+
+    /// The name for the summary and messages.
+    pub fn name(&self) -> String {
+        match self {
+            Self::File(path, _) => path.display().to_string(),
+            Self::Stdout(_) => STDOUT_NAME.to_owned(),
+        }
+    }
+
+    /// Writes the table; PLY in binary little endian unless `ascii`.
+    pub fn write(&self, columns: &[Column<'_>], ascii: bool) -> Result<()> {
+        let ply = if ascii {
+            PlyFormat::Ascii
+        } else {
+            PlyFormat::BinaryLittleEndian
+        };
+        match self {
+            Self::File(path, format) => {
+                mls_io::write_point_cloud_as(path, *format, columns, ply)?;
+            }
+            Self::Stdout(format) => {
+                let written = mls_io::write_point_cloud_to(
+                    std::io::stdout().lock(),
+                    STDOUT_NAME,
+                    *format,
+                    columns,
+                    ply,
+                );
+                match written {
+                    Err(mls_io::WriteError::Io { error, .. })
+                        if error.kind() == std::io::ErrorKind::BrokenPipe =>
+                    {
+                        quit_on_broken_pipe();
+                    }
+                    other => other?,
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The reader of standard output has gone (`mlscurv … -o - | head`): stop quietly and
+/// successfully, as a program killed by SIGPIPE would stop, without a message about it.
+fn quit_on_broken_pipe() -> ! {
+    std::process::exit(0)
+}
+
+/// Writes to standard output, quitting quietly if the reader has gone.
+pub fn write_stdout(bytes: &[u8]) -> Result<()> {
+    use std::io::Write as _;
+    let mut stdout = std::io::stdout().lock();
+    match stdout.write_all(bytes).and_then(|()| stdout.flush()) {
+        Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => quit_on_broken_pipe(),
+        other => other.map_err(|e| anyhow!("{STDOUT_NAME}: {e}")),
+    }
+}
+
+/// The output of a command with [`OutputArgs`], checked before any work is done.
+pub fn output(inputs: &[&Path], out: &OutputArgs) -> Result<Output> {
+    check_output(
+        inputs,
+        &out.output,
+        out.formats.output_format,
+        out.force,
+        out.ascii,
+        None,
+    )
+}
+
+/// Checks the output before any work is done, so that a long run does not end in an error
+/// the command line already showed: `-` is standard output in `format` (default
+/// `stdout_default`, else CSV); a file must not be one of the `inputs`, must have a known
+/// extension that agrees with `format`, must not be a directory, must be in an existing
+/// directory, and must not be read-only unless `force`.
+pub fn check_output(
+    inputs: &[&Path],
+    path: &Path,
+    format: Option<Format>,
+    force: bool,
+    ascii: bool,
+    stdout_default: Option<FileFormat>,
+) -> Result<Output> {
+    let format = format.map(FileFormat::from);
+    if is_stdio(path) {
+        let format = format.or(stdout_default).unwrap_or(FileFormat::Csv);
+        if format == FileFormat::Ply && !ascii && std::io::stdout().is_terminal() {
+            bail!(
+                "{STDOUT_NAME}: refusing to write binary PLY to a terminal; redirect it, or add --ascii"
+            );
+        }
+        return Ok(Output::Stdout(format));
+    }
+    let name = path.display();
+    for input in inputs {
+        if !is_stdio(input) && mls_io::same_file(input, path) {
+            bail!("{name}: output path is the input file; refusing to overwrite it");
+        }
+    }
+    let existing = std::fs::metadata(path).ok();
+    if existing.as_ref().is_some_and(std::fs::Metadata::is_dir) {
+        bail!("{name}: is a directory; expected an output file name");
+    }
+    let format = match (format, FileFormat::from_path(path)) {
+        (Some(given), Some(by_extension)) if given != by_extension => bail!(
+            "{name}: --output-format {} disagrees with the file's extension, which means {}",
+            format_name(given),
+            format_name(by_extension)
+        ),
+        (Some(format), _) | (None, Some(format)) => format,
+        (None, None) => bail!(
+            "{name}: {}; expected .ply, .csv, .xyz, .txt or .pts, or name the format with --output-format ply|xyz|csv",
+            match path.extension() {
+                Some(e) => format!("unknown extension \".{}\"", e.to_string_lossy()),
+                None => "no file extension".to_owned(),
+            }
+        ),
+    };
+    let dir = match path.parent() {
+        Some(parent) if !parent.as_os_str().is_empty() => parent,
+        _ => Path::new("."),
+    };
+    match std::fs::metadata(dir) {
+        Ok(meta) if meta.is_dir() => {}
+        Ok(_) => bail!("{name}: {} is not a directory", dir.display()),
+        Err(e) => bail!("{name}: directory {}: {e}", dir.display()),
+    }
+    if let Some(meta) = existing {
+        // `readonly` is the mode alone (root could write anyway); opening for writing, without
+        // truncating, asks the operating system whether this user may write to the file.
+        let denied = meta.permissions().readonly()
+            || std::fs::OpenOptions::new()
+                .write(true)
+                .open(path)
+                .is_err_and(|e| e.kind() == std::io::ErrorKind::PermissionDenied);
+        if denied && !force {
+            bail!(
+                "{name}: the file is read-only; refusing to replace it (add --force to replace it, keeping its permissions)"
+            );
+        }
+    }
+    Ok(Output::File(path.to_path_buf(), format))
 }
 
 pub fn to_points(cloud: &PointCloud) -> Vec<Point> {
@@ -77,8 +322,132 @@ pub fn to_points(cloud: &PointCloud) -> Vec<Point> {
 /// The chosen h and a sentence on why.
 pub struct Scale {
     pub h: f64,
+    /// How h was derived, without parentheses: `2 × median local spacing … over 12 neighbours`,
+    /// or `given with --h`.
     pub why: String,
     pub spacing: Option<SpacingStats>,
+    /// The multiple of the spacing, if h was derived from it.
+    pub factor: Option<f64>,
+}
+
+impl Scale {
+    /// h and where it came from, for a summary line; `options` names how to change it.
+    pub fn describe(&self, options: &str) -> String {
+        if self.spacing.is_some() {
+            format!("{:.6} = {}; {options} to change", self.h, self.why)
+        } else {
+            format!("{:.6}, {}", self.h, self.why)
+        }
+    }
+}
+
+/// Beyond this many times its bounding-box diagonal, h is refused: every sample weighs about
+/// alike, and the "surface" is one blob fitted to the whole cloud.
+const MAX_H_OVER_DIAGONAL: f64 = 10.0;
+
+/// Points at which the kernel's reach is counted, by brute force, for the warnings.
+const SUPPORT_PROBES: usize = 32;
+
+/// At most this many points are counted around each probe (every k-th point of a larger
+/// cloud, the count scaled up): a fraction to a few tenths of a percent, in milliseconds on a
+/// million points.
+const SUPPORT_SAMPLE: usize = 1 << 16;
+
+/// Samples per evaluation beyond which a run is called slow: the default h gives a few
+/// hundred within the default cutoff (about 35 times fewer).
+const SLOW_SUPPORT: f64 = 10_000.0;
+
+/// Refuses an h far beyond the size of the cloud and warns (on stderr, even with --quiet: the
+/// results would look fine) when the kernel's weight spans most of the cloud, or when its
+/// support holds so many samples that the run will be slow. At h = 1000 on the 0.25 m bunny
+/// every point came out "ok", with k ≈ 1e-6, after a run 300 times longer than usual.
+pub fn check_scale(points: &[Point], scale: &Scale, cutoff: Cutoff, file: &str) -> Result<()> {
+    let h = scale.h;
+    let Some(first) = points.first() else {
+        return Ok(());
+    };
+    let (lo, hi) = points
+        .iter()
+        .fold((first.coords, first.coords), |(lo, hi), p| {
+            (lo.inf(&p.coords), hi.sup(&p.coords))
+        });
+    let diagonal = (hi - lo).norm();
+    if !(diagonal > 0.0) {
+        return Ok(());
+    }
+    if h > MAX_H_OVER_DIAGONAL * diagonal {
+        bail!(
+            "{file}: h = {h} is {:.0} times the diagonal {diagonal:.6} of the cloud's bounding box: \
+             every point would weigh alike and the curvature would be that of one blob, not of the \
+             surface; choose h well below the size of the cloud (`mlscurv info` suggests one)",
+            h / diagonal
+        );
+    }
+    // The weight is 1.2e-4 at 3h: what lies within 3h is what shapes the surface. The cutoff
+    // (5h by default) only bounds the work, and on a small cloud holds most of it harmlessly.
+    let weighty = 3.0 * h;
+    let support = match cutoff {
+        Cutoff::Radius(c) => Some(c * h),
+        Cutoff::None => None,
+    };
+    let n = points.len();
+    let probes = n.min(SUPPORT_PROBES);
+    let step = n / probes;
+    let stride = n.div_ceil(SUPPORT_SAMPLE);
+    let sampled = n.div_ceil(stride);
+    let (mut within_weighty, mut within_support) = (0usize, 0usize);
+    for i in 0..probes {
+        let q = points[i * step];
+        for p in points.iter().step_by(stride) {
+            let d2 = (p - q).norm_squared();
+            within_weighty += usize::from(d2 <= weighty * weighty);
+            within_support += usize::from(support.is_none_or(|r| d2 <= r * r));
+        }
+    }
+    let fraction = within_weighty as f64 / (probes * sampled) as f64;
+    let per_point = within_support as f64 / probes as f64 * (n as f64 / sampled as f64);
+    let mut warnings = Vec::new();
+    if h > diagonal {
+        warnings.push(format!(
+            "h = {h} exceeds the cloud's extent (bounding-box diagonal {diagonal:.6})"
+        ));
+    } else if fraction > 0.5 {
+        warnings.push(format!(
+            "h = {h}: the kernel's weight (within 3h = {weighty:.6}) spans on average {:.0}% of \
+             the {n} points",
+            100.0 * fraction
+        ));
+    }
+    if let Some(w) = warnings.first_mut() {
+        w.push_str(
+            "; the curvature will be that of an overall smoothed shape, not of local detail",
+        );
+        // With the default factor, h is what `info` would suggest: the cloud is then too
+        // small for local detail, and saying "choose another h" would be no help.
+        match scale.factor {
+            None => w.push_str("; `mlscurv info` suggests an h"),
+            Some(f) if f > mls_core::normals::DEFAULT_H_FACTOR => {
+                w.push_str(&format!(
+                    "; a smaller --h-factor than {f} gives a smaller h"
+                ));
+            }
+            Some(_) => w.push_str("; the cloud has too few points for a local fit"),
+        }
+    }
+    if per_point > SLOW_SUPPORT {
+        warnings.push(format!(
+            "h = {h}: the kernel's support ({}) holds about {per_point:.0} of the {n} points at \
+             each evaluation; expect a long run",
+            match support {
+                Some(r) => format!("cutoff {r:.6}"),
+                None => "no cutoff".to_owned(),
+            }
+        ));
+    }
+    for w in &warnings {
+        eprintln!("mlscurv: warning: {file}: {w}");
+    }
+    Ok(())
 }
 
 pub fn choose_h(
@@ -93,19 +462,21 @@ pub fn choose_h(
             h,
             why: "given with --h".into(),
             spacing: None,
+            factor: None,
         });
     }
     let stats = spacing_statistics(points, DEFAULT_SPACING_NEIGHBOURS, par)
-        .with_context(|| format!("{}: cannot measure the point spacing", file.display()))?;
+        .with_context(|| format!("{}: cannot measure the point spacing", input_name(file)))?;
     let h = suggest_h(&stats, factor)
-        .with_context(|| format!("{}: cannot derive h from the spacing", file.display()))?;
+        .with_context(|| format!("{}: cannot derive h from the spacing", input_name(file)))?;
     Ok(Scale {
         h,
         why: format!(
-            "{factor} × median local spacing {:.6} (over {} neighbours; use --h or --h-factor to change)",
+            "{factor} × median local spacing {:.6} over {} neighbours",
             stats.spacing, stats.k
         ),
         spacing: Some(stats),
+        factor: Some(factor),
     })
 }
 
@@ -132,7 +503,7 @@ pub fn normals(
         (NormalsMode::File, None) => {
             bail!(
                 "{}: --normals file given but the file has no normals (nx, ny, nz)",
-                file.display()
+                input_name(file)
             )
         }
         (NormalsMode::File | NormalsMode::Auto, Some(n)) => Some(n),
@@ -166,7 +537,7 @@ pub fn normals(
         ..NormalsConfig::default()
     };
     let est = estimate_normals(points, &config, par)
-        .with_context(|| format!("{}: normal estimation", file.display()))?;
+        .with_context(|| format!("{}: normal estimation", input_name(file)))?;
     let orient = match orientation {
         Orientation::Outward => "oriented outward by minimum spanning tree".to_string(),
         Orientation::Viewpoint(v) => format!(
@@ -262,6 +633,7 @@ pub fn fixed_surface(
 /// (points, normals, h, cutoff), timing each stage.
 pub fn prepare<S>(
     input: &Path,
+    format: Option<Format>,
     s: &SurfaceArgs,
     t: &mut Timings,
     build: impl FnOnce(&[Point], &[Vector], f64, Cutoff) -> Result<S, ConfigError>,
@@ -270,12 +642,13 @@ pub fn prepare<S>(
     let PointCloud {
         points,
         normals: file_normals,
-    } = t.time("read", || read(input, s.columns.as_ref()))?;
+    } = t.time("read", || read(input, format, s.columns.as_ref()))?;
     // `[f64; 3]` and `Point` have the same layout: the conversion reuses the buffer.
     let points: Vec<Point> = points.into_iter().map(Point::from).collect();
     let scale = t.time("spacing", || {
         choose_h(&points, s.scale.h, s.scale.h_factor, par, input)
     })?;
+    check_scale(&points, &scale, s.cutoff, &input_name(input))?;
     let Normals {
         normals,
         source,
@@ -326,11 +699,11 @@ pub fn surface<S>(
     if p.len() < MIN_POINTS {
         bail!(
             "{}: only {} point(s) have a normal; at least {MIN_POINTS} are needed",
-            file.display(),
+            input_name(file),
             p.len()
         );
     }
-    build(p, &n, h, cutoff).with_context(|| format!("{}", file.display()))
+    build(p, &n, h, cutoff).with_context(|| input_name(file))
 }
 
 /// Runs `f` on a rayon pool with the requested number of threads (all cores by default).

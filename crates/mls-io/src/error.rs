@@ -22,6 +22,12 @@ pub enum ReadError {
         /// error reporters that print the chain would repeat it.
         error: io::Error,
     },
+    /// The path names a directory, not a file.
+    #[error("{file}: is a directory; expected a point-cloud file (.ply, .xyz, .txt, .pts or .csv)")]
+    IsADirectory {
+        /// The path.
+        file: String,
+    },
     /// The file name has no extension, so its format is unknown.
     #[error("{file}: no file extension; expected .ply, .xyz, .txt, .pts or .csv")]
     NoExtension {

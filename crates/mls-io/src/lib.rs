@@ -45,7 +45,7 @@ pub use error::{ReadError, WriteError};
 pub use text::{read_csv, read_csv_with, read_xyz, read_xyz_with};
 pub use write::{
     Axis, Column, ColumnData, PlyFormat, write_csv, write_csv_to, write_ply, write_ply_to,
-    write_point_cloud, write_xyz, write_xyz_to,
+    write_point_cloud, write_point_cloud_as, write_point_cloud_to, write_xyz, write_xyz_to,
 };
 
 /// The fields the readers look for, in the order of the slots of a row.
@@ -111,7 +111,8 @@ pub struct ReadOutcome {
 pub enum FileFormat {
     /// `.ply`: PLY, ASCII or binary.
     Ply,
-    /// `.xyz`, `.txt`, `.pts`: whitespace-separated columns without a header.
+    /// `.xyz`, `.txt`, `.pts`: whitespace-separated columns, `#` comment lines (the writers put
+    /// the column names in one).
     Xyz,
     /// `.csv`: comma-separated columns with a header row.
     Csv,
@@ -145,8 +146,9 @@ fn detect_format(path: &Path) -> Result<FileFormat, Option<String>> {
 /// The readers' notes are dropped; [`read_point_cloud_with`] returns them.
 ///
 /// # Errors
-/// [`ReadError::NoExtension`] or [`ReadError::UnknownExtension`] before the file is opened,
-/// [`ReadError::Io`] if it cannot be opened or read, and those of the reader.
+/// [`ReadError::IsADirectory`], [`ReadError::NoExtension`] or [`ReadError::UnknownExtension`]
+/// before the file is opened, [`ReadError::Io`] if it cannot be opened or read, and those of
+/// the reader.
 pub fn read_point_cloud(path: &Path) -> Result<PointCloud, ReadError> {
     read_point_cloud_with(path, &ReadOptions::default()).map(|r| r.cloud)
 }
@@ -159,11 +161,45 @@ pub fn read_point_cloud(path: &Path) -> Result<PointCloud, ReadError> {
 /// given for a PLY file.
 pub fn read_point_cloud_with(path: &Path, options: &ReadOptions) -> Result<ReadOutcome, ReadError> {
     let file = path.display().to_string();
+    // Checked first: a directory usually has no extension, and "no file extension" would send
+    // the user looking for the wrong mistake (on Linux a directory even opens, and only the
+    // first read fails).
+    if path.is_dir() {
+        return Err(ReadError::IsADirectory { file });
+    }
     let format = match detect_format(path) {
         Ok(format) => format,
         Err(None) => return Err(ReadError::NoExtension { file }),
         Err(Some(extension)) => return Err(ReadError::UnknownExtension { file, extension }),
     };
+    read_point_cloud_as_with(path, format, options)
+}
+
+/// Reads a point cloud in the given format, whatever the file's extension. The readers'
+/// notes are dropped; [`read_point_cloud_as_with`] returns them.
+///
+/// # Errors
+/// [`ReadError::IsADirectory`], [`ReadError::Io`] if the file cannot be opened or read, and
+/// those of the reader.
+pub fn read_point_cloud_as(path: &Path, format: FileFormat) -> Result<PointCloud, ReadError> {
+    read_point_cloud_as_with(path, format, &ReadOptions::default()).map(|r| r.cloud)
+}
+
+/// Reads a point cloud in the given format, whatever the file's extension, with options, and
+/// returns the readers' notes beside it.
+///
+/// # Errors
+/// Those of [`read_point_cloud_as`], and [`ReadError::ColumnsForPly`] when column names are
+/// given for PLY.
+pub fn read_point_cloud_as_with(
+    path: &Path,
+    format: FileFormat,
+    options: &ReadOptions,
+) -> Result<ReadOutcome, ReadError> {
+    let file = path.display().to_string();
+    if path.is_dir() {
+        return Err(ReadError::IsADirectory { file });
+    }
     if format == FileFormat::Ply && options.columns.is_some() {
         return Err(ReadError::ColumnsForPly { file });
     }
@@ -180,6 +216,44 @@ pub fn read_point_cloud_with(path: &Path, options: &ReadOptions) -> Result<ReadO
         }),
         FileFormat::Xyz => read_xyz_with(reader, &file, options),
         FileFormat::Csv => read_csv_with(reader, &file, options),
+    }
+}
+
+/// Reads a point cloud in the given format from a stream, such as standard input; `name` is
+/// the display name used in errors.
+///
+/// # Errors
+/// Those of [`read_ply`], [`read_xyz`] or [`read_csv`].
+pub fn read_point_cloud_from(
+    reader: impl BufRead,
+    name: &str,
+    format: FileFormat,
+) -> Result<PointCloud, ReadError> {
+    read_point_cloud_from_with(reader, name, format, &ReadOptions::default()).map(|r| r.cloud)
+}
+
+/// Reads a point cloud in the given format from a stream, as [`read_point_cloud_from`] does,
+/// with options, and returns the readers' notes beside it.
+///
+/// # Errors
+/// Those of [`read_point_cloud_from`], and [`ReadError::ColumnsForPly`] when column names are
+/// given for PLY.
+pub fn read_point_cloud_from_with(
+    reader: impl BufRead,
+    name: &str,
+    format: FileFormat,
+    options: &ReadOptions,
+) -> Result<ReadOutcome, ReadError> {
+    match format {
+        FileFormat::Ply if options.columns.is_some() => Err(ReadError::ColumnsForPly {
+            file: name.to_owned(),
+        }),
+        FileFormat::Ply => read_ply(reader, name).map(|cloud| ReadOutcome {
+            cloud,
+            notes: Vec::new(),
+        }),
+        FileFormat::Xyz => read_xyz_with(reader, name, options),
+        FileFormat::Csv => read_csv_with(reader, name, options),
     }
 }
 

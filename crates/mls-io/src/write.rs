@@ -7,7 +7,7 @@
 use std::fmt::Write as _;
 use std::fs::File;
 use std::io::{self, BufWriter, Write};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::slice;
 
 use crate::error::WriteError;
@@ -126,7 +126,8 @@ pub enum PlyFormat {
 }
 
 /// Writes `columns` to `path` in the format its extension names (case-insensitive): `.ply`
-/// (in `ply_format`), `.csv`, or `.xyz`, `.txt`, `.pts` (space-separated, no header).
+/// (in `ply_format`), `.csv`, or `.xyz`, `.txt`, `.pts` (space-separated after a `#` line of
+/// column names).
 ///
 /// For points and normals only, pass [`PointCloud::columns`](crate::PointCloud::columns).
 ///
@@ -140,11 +141,45 @@ pub fn write_point_cloud(
 ) -> Result<(), WriteError> {
     let file = path.display().to_string();
     match detect_format(path) {
-        Ok(FileFormat::Ply) => write_ply(path, columns, ply_format),
-        Ok(FileFormat::Csv) => write_csv(path, columns),
-        Ok(FileFormat::Xyz) => write_xyz(path, columns),
+        Ok(format) => write_point_cloud_as(path, format, columns, ply_format),
         Err(None) => Err(WriteError::NoExtension { file }),
         Err(Some(extension)) => Err(WriteError::UnknownExtension { file, extension }),
+    }
+}
+
+/// Writes `columns` to `path` in the given format, whatever the extension, atomically.
+///
+/// # Errors
+/// Those of [`write_ply`], [`write_csv`] and [`write_xyz`].
+pub fn write_point_cloud_as(
+    path: &Path,
+    format: FileFormat,
+    columns: &[Column<'_>],
+    ply_format: PlyFormat,
+) -> Result<(), WriteError> {
+    match format {
+        FileFormat::Ply => write_ply(path, columns, ply_format),
+        FileFormat::Csv => write_csv(path, columns),
+        FileFormat::Xyz => write_xyz(path, columns),
+    }
+}
+
+/// Writes `columns` in the given format to a stream, such as standard output; `name` is the
+/// display name used in errors.
+///
+/// # Errors
+/// Those of [`write_ply_to`], [`write_csv_to`] and [`write_xyz_to`].
+pub fn write_point_cloud_to(
+    writer: impl Write,
+    name: &str,
+    format: FileFormat,
+    columns: &[Column<'_>],
+    ply_format: PlyFormat,
+) -> Result<(), WriteError> {
+    match format {
+        FileFormat::Ply => write_ply_to(writer, name, columns, ply_format),
+        FileFormat::Csv => write_csv_to(writer, name, columns),
+        FileFormat::Xyz => write_xyz_to(writer, name, columns),
     }
 }
 
@@ -173,12 +208,14 @@ pub fn write_csv(path: &Path, columns: &[Column<'_>]) -> Result<(), WriteError> 
     let file = path.display().to_string();
     let rows = validate(&file, columns)?;
     write_atomically(path, |out| {
-        write_text_rows(out, &file, columns, rows, ',', true)
+        write_text_rows(out, &file, columns, rows, ',', TextHeader::Names)
     })
 }
 
-/// Writes `columns` space-separated without a header, atomically. [`read_xyz`](crate::read_xyz)
-/// reads the result back when the columns are `x y z` or `x y z nx ny nz`.
+/// Writes `columns` space-separated, atomically, after one comment line naming them
+/// (`# x y z nx ny nz`) so that the file says what its columns are. [`read_xyz`](crate::read_xyz)
+/// skips that line and reads the result back when the columns are `x y z` or
+/// `x y z nx ny nz`.
 ///
 /// # Errors
 /// As for [`write_ply`].
@@ -186,7 +223,7 @@ pub fn write_xyz(path: &Path, columns: &[Column<'_>]) -> Result<(), WriteError> 
     let file = path.display().to_string();
     let rows = validate(&file, columns)?;
     write_atomically(path, |out| {
-        write_text_rows(out, &file, columns, rows, ' ', false)
+        write_text_rows(out, &file, columns, rows, ' ', TextHeader::Comment)
     })
 }
 
@@ -217,11 +254,12 @@ pub fn write_csv_to(
 ) -> Result<(), WriteError> {
     let rows = validate(name, columns)?;
     let mut out = BufWriter::with_capacity(BUFFER_BYTES, writer);
-    write_text_rows(&mut out, name, columns, rows, ',', true)?;
+    write_text_rows(&mut out, name, columns, rows, ',', TextHeader::Names)?;
     out.flush().map_err(io_error(name))
 }
 
-/// Writes space-separated values to a stream; `name` is the display name used in errors.
+/// Writes space-separated values to a stream after a `#` line naming the columns, as
+/// [`write_xyz`] does; `name` is the display name used in errors.
 ///
 /// # Errors
 /// As for [`write_ply_to`].
@@ -232,7 +270,7 @@ pub fn write_xyz_to(
 ) -> Result<(), WriteError> {
     let rows = validate(name, columns)?;
     let mut out = BufWriter::with_capacity(BUFFER_BYTES, writer);
-    write_text_rows(&mut out, name, columns, rows, ' ', false)?;
+    write_text_rows(&mut out, name, columns, rows, ' ', TextHeader::Comment)?;
     out.flush().map_err(io_error(name))
 }
 
@@ -296,6 +334,10 @@ fn write_atomically(
     body: impl FnOnce(&mut BufWriter<&File>) -> Result<(), WriteError>,
 ) -> Result<(), WriteError> {
     let file = path.display().to_string();
+    // Through a symbolic link, the file it points to is replaced and the link kept, as
+    // writing into the link would do.
+    let resolved = resolve_links(path).map_err(io_error(&file))?;
+    let path = resolved.as_path();
     let Some(file_name) = path.file_name() else {
         return Err(WriteError::NotAFilePath { file });
     };
@@ -321,6 +363,15 @@ fn write_atomically(
     let temp = builder
         .tempfile_in(dir)
         .map_err(|e| io_error(&file)(io::Error::new(e.kind(), e.kind().to_string())))?;
+    // A file that is replaced keeps its permissions (a read-only file stays read-only, a
+    // group-writable one group-writable); a new one gets 0666 less the umask, as above.
+    if let Ok(existing) = std::fs::metadata(path)
+        && existing.is_file()
+    {
+        temp.as_file()
+            .set_permissions(existing.permissions())
+            .map_err(io_error(&file))?;
+    }
     {
         let mut out = BufWriter::with_capacity(BUFFER_BYTES, temp.as_file());
         body(&mut out)?;
@@ -332,6 +383,26 @@ fn write_atomically(
         error: err.error,
     })?;
     Ok(())
+}
+
+/// The path with every symbolic link of its last component followed (a dangling link gives
+/// the path it points to, which is then created). Stops after 40 links, as the kernel does,
+/// and leaves the rest to the rename's error.
+fn resolve_links(path: &Path) -> io::Result<PathBuf> {
+    let mut path = path.to_path_buf();
+    for _ in 0..40 {
+        match std::fs::symlink_metadata(&path) {
+            Ok(meta) if meta.file_type().is_symlink() => {
+                let target = std::fs::read_link(&path)?;
+                path = match path.parent() {
+                    Some(parent) if target.is_relative() => parent.join(target),
+                    _ => target,
+                };
+            }
+            _ => break,
+        }
+    }
+    Ok(path)
 }
 
 /// One value from a column.
@@ -387,7 +458,7 @@ fn write_ply_rows(
     out.write_all(header.as_bytes()).map_err(io_error(file))?;
     match format {
         PlyFormat::BinaryLittleEndian => write_binary_rows(out, file, columns, rows),
-        PlyFormat::Ascii => write_text_rows(out, file, columns, rows, ' ', false),
+        PlyFormat::Ascii => write_text_rows(out, file, columns, rows, ' ', TextHeader::None),
     }
 }
 
@@ -412,18 +483,33 @@ fn write_binary_rows(
     Ok(())
 }
 
-/// Writes the rows as text, after a header row of the names if `header` is set.
+/// What comes before the rows of a text table.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum TextHeader {
+    /// Nothing (the body of an ASCII PLY, whose header names the properties).
+    None,
+    /// A row of the names (CSV).
+    Names,
+    /// A `#` comment line of the names (XYZ), which readers of such files skip.
+    Comment,
+}
+
+/// Writes the rows as text, after the names as `header` says.
 fn write_text_rows(
     out: &mut impl Write,
     file: &str,
     columns: &[Column<'_>],
     rows: usize,
     separator: char,
-    header: bool,
+    header: TextHeader,
 ) -> Result<(), WriteError> {
-    if header {
-        let names: Vec<&str> = columns.iter().map(|c| c.name).collect();
-        let line = names.join(&separator.to_string()) + "\n";
+    let names: Vec<&str> = columns.iter().map(|c| c.name).collect();
+    let line = match header {
+        TextHeader::None => None,
+        TextHeader::Names => Some(names.join(&separator.to_string()) + "\n"),
+        TextHeader::Comment => Some(format!("# {}\n", names.join(&separator.to_string()))),
+    };
+    if let Some(line) = line {
         out.write_all(line.as_bytes()).map_err(io_error(file))?;
     }
     let mut cursors: Vec<Cursor<'_>> = columns.iter().map(|c| c.data.cursor()).collect();

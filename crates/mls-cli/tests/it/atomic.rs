@@ -37,7 +37,7 @@ fn successful_runs_leave_exactly_the_input_and_the_output_file() {
                 cmd.arg("eval")
                     .arg("--cloud")
                     .arg(&input)
-                    .arg("--at")
+                    .arg("--queries")
                     .arg(&input)
                     .arg("-o")
                     .arg(&out);

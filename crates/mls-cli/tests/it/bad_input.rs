@@ -152,7 +152,7 @@ fn missing_input_is_a_one_line_error_for_every_command() {
             "eval".into(),
             "--cloud".into(),
             missing.clone().into(),
-            "--at".into(),
+            "--queries".into(),
             missing.clone().into(),
         ],
     ];
@@ -305,7 +305,7 @@ fn output_equal_to_input_is_refused_and_the_input_is_unchanged() {
                 cmd.arg("eval")
                     .arg("--cloud")
                     .arg(&input)
-                    .arg("--at")
+                    .arg("--queries")
                     .arg(&input);
             } else {
                 cmd.arg(command).arg(&input);

@@ -101,7 +101,19 @@ fn named_columns_read_normals_anywhere_and_skip_the_rest() {
         info.stdout
     );
     assert!(info.stderr.is_empty(), "{}", info.stderr);
-    let (mean, stderr) = median_mean(&input, &["--columns", columns, "--normals", "file"]);
+    // The MLS surface of exact normals on the sphere gives 1/R to 1e-6 (the jet, fitting the
+    // samples' slopes as well, is off by about 2e-6).
+    let (mean, stderr) = median_mean(
+        &input,
+        &[
+            "--columns",
+            columns,
+            "--normals",
+            "file",
+            "--method",
+            "paper",
+        ],
+    );
     assert!((mean - 1.0 / SPHERE_R).abs() < 1e-6, "median mean {mean}");
     assert!(stderr.contains("normals         from the file"), "{stderr}");
     // Without the names the file is ten columns: x y z would be taken from columns 1-3.

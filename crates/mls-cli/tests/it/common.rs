@@ -90,6 +90,32 @@ pub fn write_xyz(path: &Path, points: &[[f64; 3]], normals: Option<&[[f64; 3]]>)
     std::fs::write(path, text).expect("cannot write the XYZ fixture");
 }
 
+/// Writes a Fibonacci sphere of radius 1 with `n` points and exact outward normals as XYZ.
+pub fn write_unit_sphere(path: &Path, n: usize) {
+    let s = mls_shapes::fibonacci_sphere(n, 1.0);
+    write_xyz(
+        path,
+        &mls_shapes::points(&s),
+        Some(&mls_shapes::normals(&s)),
+    );
+}
+
+/// Asserts that a failed run printed one `mlscurv: error:` line naming `name` and containing
+/// each of `details`, nothing on stdout, and did not panic.
+#[track_caller]
+pub fn assert_one_line_error(r: &Run, name: &str, details: &[&str]) {
+    let e = &r.stderr;
+    assert!(!r.success, "expected failure, got success: {e}");
+    assert!(!e.contains("panicked"), "panic:\n{e}");
+    assert!(e.starts_with("mlscurv: error:"), "stderr: {e}");
+    assert_eq!(e.matches('\n').count(), 1, "stderr is not one line: {e:?}");
+    assert!(e.contains(name), "stderr does not name {name}: {e}");
+    for d in details {
+        assert!(e.contains(d), "stderr does not say {d:?}: {e}");
+    }
+    assert_eq!(r.stdout, "", "stdout");
+}
+
 /// The Fibonacci sphere of radius [`SPHERE_R`] with [`SPHERE_N`] points: positions and exact
 /// outward normals.
 pub fn sphere() -> (Vec<[f64; 3]>, Vec<[f64; 3]>) {

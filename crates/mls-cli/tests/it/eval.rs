@@ -78,7 +78,7 @@ fn eval_stdout(args: &[&str]) -> String {
             .arg("eval")
             .arg("--cloud")
             .arg(&cloud)
-            .arg("--at")
+            .arg("--queries")
             .arg(&at)
             .args(args),
     )
@@ -275,7 +275,7 @@ fn eval_output_file_equals_stdout() {
             .arg("eval")
             .arg("--cloud")
             .arg(&cloud)
-            .arg("--at")
+            .arg("--queries")
             .arg(&at)
             .arg("-o")
             .arg(&out),

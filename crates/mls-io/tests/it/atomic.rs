@@ -97,7 +97,10 @@ fn relative_path_in_current_directory_works() {
     let contents = fs::read_to_string(path);
     let _ = fs::remove_file(path);
     result.unwrap();
-    assert_eq!(contents.unwrap(), "1.0 1.0 1.0\n2.0 2.0 2.0\n3.0 3.0 3.0\n");
+    assert_eq!(
+        contents.unwrap(),
+        "# x y z\n1.0 1.0 1.0\n2.0 2.0 2.0\n3.0 3.0 3.0\n"
+    );
 }
 
 #[cfg(unix)]
@@ -113,6 +116,62 @@ fn output_gets_the_usual_permissions() {
     write_ply(&path, &columns(), PlyFormat::BinaryLittleEndian).unwrap();
     let mode = |p: &Path| fs::metadata(p).unwrap().permissions().mode() & 0o777;
     assert_eq!(mode(&path), mode(&reference));
+}
+
+/// Replacing a file keeps its mode, whatever it is: read-only stays read-only (the caller
+/// decides whether to overwrite such a file at all), executable or group-writable stays so.
+#[cfg(unix)]
+#[test]
+fn replaced_file_keeps_its_permissions() {
+    use std::os::unix::fs::PermissionsExt;
+    let dir = tempfile::tempdir().unwrap();
+    let mode = |p: &Path| fs::metadata(p).unwrap().permissions().mode() & 0o777;
+    for (name, before) in [("ro.csv", 0o444), ("rw.ply", 0o664), ("odd.xyz", 0o640)] {
+        let path = dir.path().join(name);
+        fs::write(&path, "old").unwrap();
+        fs::set_permissions(&path, fs::Permissions::from_mode(before)).unwrap();
+        write_point_cloud(&path, &columns(), PlyFormat::Ascii).unwrap();
+        assert_ne!(fs::read(&path).unwrap(), b"old", "{name} was not replaced");
+        assert_eq!(mode(&path), before, "{name}");
+    }
+}
+
+/// Writing through a symbolic link replaces the file it points to and keeps the link.
+#[cfg(unix)]
+#[test]
+fn symbolic_link_is_kept_and_its_target_replaced() {
+    let dir = tempfile::tempdir().unwrap();
+    fs::create_dir(dir.path().join("data")).unwrap();
+    let target = dir.path().join("data").join("real.csv");
+    fs::write(&target, "old").unwrap();
+    let link = dir.path().join("link.csv");
+    // A relative link, resolved against the link's directory.
+    std::os::unix::fs::symlink(Path::new("data").join("real.csv"), &link).unwrap();
+    write_csv(&link, &columns()).unwrap();
+    assert!(
+        fs::symlink_metadata(&link)
+            .unwrap()
+            .file_type()
+            .is_symlink()
+    );
+    assert!(fs::read_to_string(&target).unwrap().starts_with("x,y,z\n"));
+    assert_eq!(listing(dir.path()), ["data", "link.csv"]);
+    assert_eq!(listing(&dir.path().join("data")), ["real.csv"]);
+}
+
+#[test]
+fn directory_as_input_is_named_as_such() {
+    let dir = tempfile::tempdir().unwrap();
+    for name in ["scans", "scans.ply"] {
+        let path = dir.path().join(name);
+        fs::create_dir(&path).unwrap();
+        let err = mls_io::read_point_cloud(&path).unwrap_err();
+        assert!(
+            matches!(err, mls_io::ReadError::IsADirectory { .. }),
+            "{err:?}"
+        );
+        assert_message(&err, &path.display().to_string(), &["is a directory"]);
+    }
 }
 
 #[test]

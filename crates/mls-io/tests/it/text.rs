@@ -1,8 +1,9 @@
 //! XYZ/TXT/PTS and CSV files with known contents.
 
 use mls_io::{
-    ColumnNames, PointCloud, ReadError, ReadOptions, ReadOutcome, read_csv, read_csv_with,
-    read_point_cloud_with, read_xyz, read_xyz_with,
+    ColumnNames, FileFormat, PointCloud, ReadError, ReadOptions, ReadOutcome, read_csv,
+    read_csv_with, read_point_cloud_as_with, read_point_cloud_from_with, read_point_cloud_with,
+    read_xyz, read_xyz_with,
 };
 
 #[test]
@@ -245,6 +246,22 @@ fn named_columns_are_refused_for_ply() {
         err.contains("a.ply: --columns applies to text files"),
         "{err}"
     );
+    // Also when the format is named, for a file or a stream.
+    let err = read_point_cloud_as_with(&path, FileFormat::Ply, &options)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("a.ply: --columns applies to text files"),
+        "{err}"
+    );
+    let bytes = std::fs::read(&path).unwrap();
+    let err = read_point_cloud_from_with(&bytes[..], "<stdin>", FileFormat::Ply, &options)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("<stdin>: --columns applies to text files"),
+        "{err}"
+    );
     assert_eq!(
         read_point_cloud_with(&path, &ReadOptions::default())
             .unwrap()
@@ -252,4 +269,40 @@ fn named_columns_are_refused_for_ply() {
             .points,
         [[1.0, 2.0, 3.0]]
     );
+}
+
+#[test]
+fn named_columns_apply_with_a_named_format_and_to_streams() {
+    // Columns 4-6 are not unit vectors: without names they are skipped with a note.
+    let text = "7 1 2 3 0 0 2\n8 4 5 6 0 2 0\n";
+    let options = ReadOptions {
+        columns: Some(ColumnNames::parse("i,x,y,z,nx,ny,nz").unwrap()),
+    };
+    let from_stream =
+        read_point_cloud_from_with(text.as_bytes(), "<stdin>", FileFormat::Xyz, &options).unwrap();
+    assert_eq!(from_stream.cloud.points, [[1.0, 2.0, 3.0], [4.0, 5.0, 6.0]]);
+    assert_eq!(
+        from_stream.cloud.normals,
+        Some(vec![[0.0, 0.0, 2.0], [0.0, 2.0, 0.0]])
+    );
+    assert!(from_stream.notes.is_empty(), "{:?}", from_stream.notes);
+    let plain = read_point_cloud_from_with(
+        text.as_bytes(),
+        "<stdin>",
+        FileFormat::Xyz,
+        &ReadOptions::default(),
+    )
+    .unwrap();
+    assert_eq!(plain.cloud.points, [[7.0, 1.0, 2.0], [8.0, 4.0, 5.0]]);
+    assert_eq!(plain.cloud.normals, None);
+    assert!(
+        plain.notes.iter().any(|n| n.starts_with("<stdin>: ")),
+        "{:?}",
+        plain.notes
+    );
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("scan.asc");
+    std::fs::write(&path, text).unwrap();
+    let from_file = read_point_cloud_as_with(&path, FileFormat::Xyz, &options).unwrap();
+    assert_eq!(from_file, from_stream);
 }
