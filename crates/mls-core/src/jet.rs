@@ -161,14 +161,22 @@ impl Equations {
         }
     }
 
-    /// Adds the row `φ · c = y` with weight `w` (lower triangles only).
+    /// Adds the row `φ · c = y` with weight `w`, to the upper triangles only: column `a`'s
+    /// rows `0..=a` are contiguous in the column-major storage, so the loop vectorises.
     fn add(&mut self, phi: &[f64; 15], y: f64, w: f64, terms: usize) {
+        let (m, m2) = (self.m.as_mut_slice(), self.m2.as_mut_slice());
         for a in 0..terms {
             let wa = w * phi[a];
+            let wwa = wa * w;
             self.rhs[a] += wa * y;
-            for (b, &pb) in phi.iter().enumerate().take(a + 1) {
-                self.m[(a, b)] += wa * pb;
-                self.m2[(a, b)] += wa * w * pb;
+            let column = a * 15..a * 15 + a + 1;
+            for ((c, c2), &pb) in m[column.clone()]
+                .iter_mut()
+                .zip(&mut m2[column])
+                .zip(&phi[..=a])
+            {
+                *c += wa * pb;
+                *c2 += wwa * pb;
             }
         }
         self.weight += w;
@@ -177,8 +185,8 @@ impl Equations {
     fn symmetrise(&mut self, terms: usize) {
         for a in 0..terms {
             for b in 0..a {
-                self.m[(b, a)] = self.m[(a, b)];
-                self.m2[(b, a)] = self.m2[(a, b)];
+                self.m[(a, b)] = self.m[(b, a)];
+                self.m2[(a, b)] = self.m2[(b, a)];
             }
         }
     }
