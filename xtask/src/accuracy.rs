@@ -162,6 +162,41 @@ fn run_method(method: &Method, cloud: &Cloud, normals: &[Vector], h: f64) -> Res
         Method::Jet(config) => {
             let s = MlsSurface::new(&cloud.points, normals, MlsConfig::new(h))?;
             let r = s.jet_at_points(&cloud.points, config, Parallelism::Rayon);
+            if std::env::var_os("JET_DIAG").is_some() {
+                let mut rows: Vec<(f64, f64, f64, f64, f64, f64)> = r
+                    .iter()
+                    .zip(&cloud.truth)
+                    .filter_map(|(r, t)| {
+                        r.as_ref().ok().map(|p| {
+                            (
+                                p.predicted_error()[0],
+                                p.sd[0],
+                                p.bias[0],
+                                p.fit.radius / h,
+                                (p.curvature.k1 - t[0]).powi(2),
+                                p.fit.noise,
+                            )
+                        })
+                    })
+                    .collect();
+                rows.sort_by(|a, b| a.0.total_cmp(&b.0));
+                let n = rows.len();
+                for d in 0..10 {
+                    let part = &rows[d * n / 10..(d + 1) * n / 10];
+                    let m = |f: &dyn Fn(&(f64, f64, f64, f64, f64, f64)) -> f64| {
+                        part.iter().map(f).sum::<f64>() / part.len() as f64
+                    };
+                    eprintln!(
+                        "decile {d}: pred {:.2e} sd {:.2e} bias {:.2e} ρ/h {:.2} rms err {:.2e} noise {:.2e}",
+                        m(&|r| r.0),
+                        m(&|r| r.1),
+                        m(&|r| r.2),
+                        m(&|r| r.3),
+                        m(&|r| r.4).sqrt(),
+                        m(&|r| r.5)
+                    );
+                }
+            }
             (
                 r.iter()
                     .map(|r| r.map_or(nan, |p| [p.curvature.k1, p.curvature.k2]))

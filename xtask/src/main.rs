@@ -36,7 +36,8 @@ Tasks:
                  Every estimator on random, jittered, grid, scanline and noisy clouds against
                  the analytic truth; writes docs/accuracy.md.
   accuracy-explore [CLOUD]
-                 The same clouds with several jet settings, printed (for studies).
+                 The same clouds with several jet settings, printed (for studies); with
+                 JET_DIAG=1 also the make-up of the predicted error by decile.
   ci             fmt --check, clippy -D warnings, tests, validate --quick.";
 
 fn main() -> Result<()> {

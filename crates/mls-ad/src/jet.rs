@@ -53,6 +53,8 @@ fn fit_once(
     // Rows: every height, then (if used) two slope rows per sample with a usable normal.
     let mut a_h = Vec::new();
     let mut a_s = Vec::new();
+    // The height row each slope row belongs to.
+    let mut owner = Vec::new();
     for &(u, v, z, nu, w) in rows {
         a_h.push((
             ex.iter()
@@ -84,6 +86,7 @@ fn fit_once(
                 .collect();
             a_s.push((du, -nu.x / nu.z, w));
             a_s.push((dv, -nu.y / nu.z, w));
+            owner.extend([a_h.len() - 1; 2]);
         }
     }
     let gram = |rows: &[(Vec<f64>, f64, f64)], power: i32| {
@@ -151,7 +154,27 @@ fn fit_once(
         } else {
             0.0
         };
-        let cov_full = &inv * (&h2 * var_h + &s2 * (lambda * lambda * var_s)) * &inv;
+        let samples = a_h.len();
+        let cov_full = if use_slopes && samples > m {
+            // Cluster-robust sandwich, one cluster per sample (its height and slope rows).
+            let mut g = vec![DVector::<f64>::zeros(m); samples];
+            for (i, (phi, y, w)) in a_h.iter().enumerate() {
+                let p = DVector::from_column_slice(phi);
+                let r = y - p.dot(&c);
+                g[i] += p * (w * r);
+            }
+            for ((phi, y, w), &i) in a_s.iter().zip(&owner) {
+                let p = DVector::from_column_slice(phi);
+                let r = y - p.dot(&c);
+                g[i] += p * (w * lambda * r);
+            }
+            let meat = g.iter().fold(DMatrix::<f64>::zeros(m, m), |acc, g| {
+                acc + g * g.transpose()
+            });
+            &inv * meat * &inv * (samples as f64 / (samples - m) as f64)
+        } else {
+            &inv * (&h2 * var_h + &s2 * (lambda * lambda * var_s)) * &inv
+        };
         let cov = Matrix3::from_fn(|i, j| cov_full[(3 + i, 3 + j)]);
         out = Some((c.iter().copied().collect(), ex.clone(), var_h.sqrt(), cov));
         if use_slopes {
@@ -322,18 +345,41 @@ pub fn jet_witness(
     if best.is_none() {
         return fallback;
     }
-    // Least estimated squared error among the accepted scales, the bias of each from its
-    // neighbour on the ladder (∝ ρ⁴: factor 4 per step of √2).
+    // Least estimated squared error among the accepted scales; the bias of scale j is
+    // t_j √(c² + var c) from the weighted line k = k* + c t, t = (ρ/ρ₀)⁴, through every fit.
+    let t = |w: &JetWitness| (w.radius / ladder[0].radius).powi(4);
+    let growth = [0, 1].map(|i| {
+        if ladder.len() < 2 {
+            return 0.0;
+        }
+        let pts: Vec<(f64, f64, f64)> = ladder
+            .iter()
+            .map(|w| {
+                (
+                    t(w),
+                    if i == 0 { w.k1 } else { w.k2 },
+                    1.0 / w.sd[i].powi(2),
+                )
+            })
+            .collect();
+        // The normal equations of the 2-parameter weighted line, solved by nalgebra.
+        let a = nalgebra::Matrix2::new(
+            pts.iter().map(|p| p.2).sum::<f64>(),
+            pts.iter().map(|p| p.2 * p.0).sum::<f64>(),
+            pts.iter().map(|p| p.2 * p.0).sum::<f64>(),
+            pts.iter().map(|p| p.2 * p.0 * p.0).sum::<f64>(),
+        );
+        let b = nalgebra::Vector2::new(
+            pts.iter().map(|p| p.2 * p.1).sum::<f64>(),
+            pts.iter().map(|p| p.2 * p.0 * p.1).sum::<f64>(),
+        );
+        let inv = a.try_inverse().unwrap_or_else(nalgebra::Matrix2::zeros);
+        let c = (inv * b)[1];
+        (c * c + inv[(1, 1)]).sqrt()
+    });
     (0..accepted)
         .map(|j| {
-            let (a, b, f) = if j + 1 < ladder.len() {
-                (&ladder[j], &ladder[j + 1], 1.0 / 3.0)
-            } else if j > 0 {
-                (&ladder[j - 1], &ladder[j], 4.0 / 3.0)
-            } else {
-                (&ladder[j], &ladder[j], 0.0)
-            };
-            let bias = [(b.k1 - a.k1).abs() * f, (b.k2 - a.k2).abs() * f];
+            let bias = growth.map(|g| g * t(&ladder[j]));
             let w = JetWitness { bias, ..ladder[j] };
             let mse = (0..2)
                 .map(|i| w.sd[i].powi(2) + bias[i].powi(2))

@@ -240,33 +240,26 @@ pub fn past_optimum(ladder: &[JetPoint]) -> bool {
 /// The scale of least estimated mean squared error among the scales the confidence intervals
 /// accepted.
 ///
-/// `ladder` holds the first `accepted` fits (increasing radius), those the intervals
-/// accepted, possibly followed by the first fit they rejected. Each accepted scale's bias is estimated from its neighbour on the
-/// ladder: with the bias ∝ ρ⁴ of a degree-4 fit, a step of √2 quadruples it, so
-/// `b_j = |k_{j+1} − k_j|/3` (or `4|k_j − k_{j−1}|/3` for the last one). The chosen point
-/// carries that bias, which enters its predicted error. Under noise the scatter falls with
-/// the scale and a larger one wins; on clean data the bias grows and the smallest wins.
+/// `ladder` holds the fits in increasing radius; the first `accepted` are the candidates (a
+/// last one may be the fit the intervals rejected). The bias of a degree-4 fit grows as ρ⁴, so
+/// every fit of the ladder, rejected one included, enters one weighted least-squares line
+/// `k_j = k* + c t_j`, `t_j = (ρ_j/ρ_0)⁴`, weights `1/sd_j²`, per principal curvature; scale
+/// j's bias is `t_j √(c² + var c)`. With two fits this is the step between them over 3 with
+/// the step's own scatter; with more, the steps average. Counting `var c` keeps a scale whose
+/// step is small by chance from being chosen with an under-predicted error. The chosen point
+/// carries that bias, which enters its predicted error. Under noise the scatter falls with the
+/// scale and a larger one wins; on clean data the bias grows and the smallest wins.
 ///
 /// # Panics
 /// If `accepted` is 0.
 pub fn choose_scale(ladder: &[JetPoint], accepted: usize) -> JetPoint {
-    let k = |p: &JetPoint| [p.curvature.k1, p.curvature.k2];
+    let growth = bias_growth(ladder);
+    let r0 = ladder[0].fit.radius;
     let mut best: Option<(f64, JetPoint)> = None;
-    for j in 0..accepted {
-        let p = ladder[j];
-        let bias = if j + 1 < ladder.len() {
-            let (a, b) = (k(&p), k(&ladder[j + 1]));
-            [(b[0] - a[0]).abs() / 3.0, (b[1] - a[1]).abs() / 3.0]
-        } else if j > 0 {
-            let (a, b) = (k(&ladder[j - 1]), k(&p));
-            [
-                (b[0] - a[0]).abs() * 4.0 / 3.0,
-                (b[1] - a[1]).abs() * 4.0 / 3.0,
-            ]
-        } else {
-            [0.0; 2]
-        };
-        let candidate = JetPoint { bias, ..p };
+    for p in &ladder[..accepted] {
+        let t = (p.fit.radius / r0).powi(4);
+        let bias = growth.map(|g| t * g);
+        let candidate = JetPoint { bias, ..*p };
         let [e1, e2] = candidate.predicted_error();
         let mse = e1 * e1 + e2 * e2;
         if best.as_ref().is_none_or(|(m, _)| mse < *m) {
@@ -274,6 +267,31 @@ pub fn choose_scale(ladder: &[JetPoint], accepted: usize) -> JetPoint {
         }
     }
     best.map(|(_, p)| p).expect("a non-empty ladder")
+}
+
+/// `√(c² + var c)` of the weighted line `k_j = k* + c (ρ_j/ρ_0)⁴` through the ladder, for k1
+/// and k2; 0 with fewer than two fits.
+fn bias_growth(ladder: &[JetPoint]) -> [f64; 2] {
+    if ladder.len() < 2 {
+        return [0.0; 2];
+    }
+    let r0 = ladder[0].fit.radius;
+    [0, 1].map(|i| {
+        let (mut sw, mut swt, mut swtt, mut swk, mut swtk) = (0.0, 0.0, 0.0, 0.0, 0.0);
+        for p in ladder {
+            let t = (p.fit.radius / r0).powi(4);
+            let w = 1.0 / (p.sd[i] * p.sd[i]);
+            let k = p.curvature_k(i);
+            sw += w;
+            swt += w * t;
+            swtt += w * t * t;
+            swk += w * k;
+            swtk += w * t * k;
+        }
+        let det = sw * swtt - swt * swt;
+        let c = (sw * swtk - swt * swk) / det;
+        (c * c + sw / det).sqrt()
+    })
 }
 
 /// Fits a jet to `samples` (positions relative to the query, any orientation) in the frame
@@ -481,18 +499,37 @@ fn solve<const N: usize>(
         // Weighted residuals from the samples again (yᵀΩy − cᵀAᵀΩy loses the digits of a
         // small residual).
         let (mut rss_h, mut rss_s) = (0.0, 0.0);
+        // With slopes, each sample's height and slope errors share its displacement: the
+        // covariance is the cluster-robust sandwich M⁻¹ (Σ_samples g gᵀ) M⁻¹, g = Σ ω r φ over
+        // the sample's rows (a height row opens each sample).
+        let mut meat = SMatrix::<f64, N, N>::zeros();
+        let mut g = SVector::<f64, N>::zeros();
+        let mut samples = 0usize;
         for row in rows {
-            match *row {
+            let (phi, y, w) = match *row {
                 Row::Height { phi, z, w } => {
-                    let p: f64 = (0..N).map(|k| c[k] * phi[k]).sum();
-                    rss_h += w * (z - p) * (z - p);
+                    if samples > 0 {
+                        meat += g * g.transpose();
+                    }
+                    g.fill(0.0);
+                    samples += 1;
+                    (phi, z, w)
                 }
-                Row::Slope { phi, slope, w } => {
-                    let p: f64 = (0..N).map(|k| c[k] * phi[k]).sum();
-                    rss_s += w * (slope - p) * (slope - p);
+                Row::Slope { phi, slope, w } => (phi, slope, w * lambda),
+            };
+            let p: f64 = (0..N).map(|k| c[k] * phi[k]).sum();
+            let r = y - p;
+            match row {
+                Row::Height { .. } => rss_h += w * r * r,
+                Row::Slope { .. } => rss_s += w / lambda * r * r,
+            }
+            if use_slopes {
+                for k in 0..N {
+                    g[k] += w * r * phi[k];
                 }
             }
         }
+        meat += g * g.transpose();
         // Degrees of freedom left to each kind of data: Σω − its share of the hat matrix's
         // trace (exact for one kind of data with independent noise).
         let dof_h = heights.weight - (inv * hp2).trace();
@@ -507,7 +544,12 @@ fn solve<const N: usize>(
             0.0
         };
         let sel = inv.fixed_columns::<3>(A20).into_owned();
-        let cov_m = hp2 * var_h + sp2 * (lambda * lambda * var_s);
+        let cov_m = if use_slopes && samples > N {
+            // Small-sample factor n/(n − p) of the sandwich.
+            meat * (samples as f64 / (samples - N) as f64)
+        } else {
+            hp2 * var_h + sp2 * (lambda * lambda * var_s)
+        };
         let cov = sel.transpose() * cov_m * sel;
         result = Some(Solution {
             c,
