@@ -1,7 +1,7 @@
 //! The jet estimator's witness: the same definition (`mls_core::jet`'s documentation) computed
 //! by another route. Its own support (a brute-force distance filter over every sample), its
-//! own tangent basis, a dense weighted design matrix solved by SVD instead of normal
-//! equations and Cholesky, and the curvature of the fitted surface `F = w − P(u, v)` by
+//! own tangent basis, the normal equations formed from the dense weighted design matrix and
+//! solved by LU (mls-core accumulates them row by row and uses Cholesky), and the curvature of the fitted surface `F = w − P(u, v)` by
 //! hyper-dual differentiation and a 3 × 3 eigen-decomposition.
 
 use mls_core::Sample;
@@ -97,8 +97,7 @@ fn fit_once(
         }
         g
     };
-    let (h2, s1, s2) = (gram(&a_h, 2), gram(&a_s, 1), gram(&a_s, 2));
-    let h1 = gram(&a_h, 1);
+    let (h2, s2) = (gram(&a_h, 2), gram(&a_s, 2));
     let wsum_h: f64 = a_h.iter().map(|r| r.2).sum();
     let wsum_s: f64 = a_s.iter().map(|r| r.2).sum();
     let use_slopes = slopes && wsum_s > 0.0;
@@ -121,18 +120,19 @@ fn fit_once(
             }
             b[r] = y * sw;
         }
-        let svd = a.clone().svd(true, true);
-        let smax = svd.singular_values.max();
-        // Singular values squared are the eigenvalues of M: the same 1e-10 floor relative to
-        // M's scale as the closed form's pivot test, up to the diagonal/eigenvalue difference.
-        let diag_max = (0..m)
-            .map(|i| (h1.clone() + &s1 * lambda)[(i, i)])
-            .fold(0.0f64, f64::max);
-        if svd.singular_values.min().powi(2) < 1e-10 * diag_max || smax == 0.0 {
+        let mm = a.transpose() * &a;
+        // The degeneracy test is defined on M = AᵀΩA's Cholesky pivots (a pivot² below 1e-10
+        // of the largest diagonal entry); the rest of the solve goes through the SVD.
+        let diag_max = (0..m).map(|i| mm[(i, i)]).fold(0.0f64, f64::max);
+        let chol = nalgebra::Cholesky::new(mm.clone())?;
+        let l = chol.l();
+        if (0..m).any(|i| !(l[(i, i)] * l[(i, i)] > 1e-10 * diag_max)) {
             return None;
         }
-        let c = svd.solve(&b, 0.0).ok()?;
-        let mm = a.transpose() * &a;
+        // LU of the dense normal equations (nalgebra's SVD lost digits on the worst-conditioned
+        // systems the pivot test admits, cond(M) up to 1e10: measured c20 wrong in the third
+        // digit where both factorisations of M agree).
+        let c = mm.clone().lu().solve(&(a.transpose() * &b))?;
         let inv = mm.try_inverse()?;
         let (mut rss_h, mut rss_s) = (0.0, 0.0);
         for (phi, y, w) in &a_h {
@@ -222,13 +222,15 @@ fn fitted<D: DualNum<Primitive = f64> + Copy>(
     w - height(u, v, c, ex, rho)
 }
 
-/// The witness of `Evaluator::jet_at` at `x`, from all `samples` of the cloud.
-pub fn jet_witness(
+/// Every scale `Evaluator::jet_at` may return at `x` (those the intervals accept), each with
+/// its estimated squared error, from all `samples` of the cloud; or the single lower-degree
+/// fallback, or `None` where no fit exists.
+pub fn jet_candidates(
     x: &Vector3<f64>,
     samples: &[Sample],
     h: f64,
     config: &mls_core::JetConfig,
-) -> Option<JetWitness> {
+) -> Option<Vec<(f64, JetWitness)>> {
     let slopes = config.normals == mls_core::NormalData::Slopes;
     let mut frame: Option<(Vector3<f64>, Vector3<f64>, Vector3<f64>)> = None;
     let mut best: Option<JetWitness> = None;
@@ -343,7 +345,7 @@ pub fn jet_witness(
         }
     }
     if best.is_none() {
-        return fallback;
+        return fallback.map(|w| vec![(0.0, w)]);
     }
     // Least estimated squared error among the accepted scales; the bias of scale j is
     // t_j √(c² + var c) from the weighted line k = k* + c t, t = (ρ/ρ₀)⁴, through every fit.
@@ -377,15 +379,31 @@ pub fn jet_witness(
         let c = (inv * b)[1];
         (c * c + inv[(1, 1)]).sqrt()
     });
-    (0..accepted)
-        .map(|j| {
-            let bias = growth.map(|g| g * t(&ladder[j]));
-            let w = JetWitness { bias, ..ladder[j] };
-            let mse = (0..2)
-                .map(|i| w.sd[i].powi(2) + bias[i].powi(2))
-                .sum::<f64>();
-            (mse, w)
-        })
+    Some(
+        (0..accepted)
+            .map(|j| {
+                let bias = growth.map(|g| g * t(&ladder[j]));
+                let w = JetWitness { bias, ..ladder[j] };
+                let mse = (0..2)
+                    .map(|i| w.sd[i].powi(2) + bias[i].powi(2))
+                    .sum::<f64>();
+                (mse, w)
+            })
+            .collect(),
+    )
+}
+
+/// The witness of `Evaluator::jet_at` at `x`, from all `samples` of the cloud: the scale of
+/// least estimated squared error among [`jet_candidates`].
+pub fn jet_witness(
+    x: &Vector3<f64>,
+    samples: &[Sample],
+    h: f64,
+    config: &mls_core::JetConfig,
+) -> Option<JetWitness> {
+    let candidates = jet_candidates(x, samples, h, config)?;
+    candidates
+        .into_iter()
         .fold(None::<(f64, JetWitness)>, |acc, (m, w)| match acc {
             Some((am, _)) if am <= m => acc,
             _ => Some((m, w)),

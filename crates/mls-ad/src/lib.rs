@@ -8,7 +8,7 @@
 
 mod jet;
 
-pub use jet::{JetWitness, jet_witness};
+pub use jet::{JetWitness, jet_candidates, jet_witness};
 use mls_core::Sample;
 use nalgebra::{Matrix3, SVector, SymmetricEigen, Vector3};
 use num_dual::{DualNum, gradient, hessian};

@@ -1,14 +1,16 @@
 //! Weighted polynomial jets: a second-order-and-beyond curvature estimator that converges on
 //! irregularly sampled clouds, where the Amenta–Kil surface does not.
 //!
-//! At a query x with frame normal n (the MLS normal field, Eq. 2, at x) and tangents t1, t2,
-//! every sample q within the support radius ρ gets local coordinates
-//! `(u, v, w) = ((q − x)·t1, (q − x)·t2, (q − x)·n)` and the weight
-//! `ω = (1 − |q − x|²/ρ²)³`. The height `w` is fitted by weighted least squares with a
-//! polynomial of total degree 4 in `(u, v)` (15 coefficients `a_ij` of `u^i v^j`; lower
-//! degrees when the neighbourhood cannot determine it):
+//! At a query x with frame normal n (the input normals averaged with the jet's weight) and
+//! tangents t1, t2, every sample q within the support radius ρ whose normal faces the frame
+//! gets local coordinates `(u, v, w) = ((q − x)·t1, (q − x)·t2, (q − x)·n)` and the weight
+//! `ω = (1 − |q − x|²/ρ²)³`. The heights `w`, and with [`NormalData::Slopes`] the slopes of
+//! the samples' normals, are fitted by weighted least squares with a polynomial of total
+//! degree 4 in `(u, v)` (15 coefficients `a_ij` of `u^i v^j`; lower degrees when the
+//! neighbourhood cannot determine it):
 //!
-//! $$ \min_a \sum_i ω_i \big(w_i − P_a(u_i, v_i)\big)^2. $$
+//! $$ \min_a \sum_i ω_i \big(w_i − P_a(u_i, v_i)\big)^2
+//!    + λ \sum_i ω_i \big|∇P_a(u_i, v_i) − s_i\big|^2. $$
 //!
 //! The fitted surface is the zero set of `F(y) = w − P(u, v)` in the frame, and at its foot
 //! point `(0, 0, a00)` above x
@@ -19,19 +21,18 @@
 //! which [`crate::curvature()`] turns into k1, k2 and directions with the product's sign
 //! convention. The frame normal only has to be roughly right: the linear terms absorb a tilt.
 //!
-//! **Noise and predicted error.** The weighted residuals give the noise estimate
-//! `σ̂² = Σω r² / (Σω − tr(M⁻¹M₂))` with `M = AᵀΩA`, `M₂ = AᵀΩ²A` (unbiased for independent
-//! noise), and the coefficients' covariance is `σ̂² M⁻¹M₂M⁻¹`. Its (a20, a11, a02) block,
-//! pushed through the first-order change of each principal curvature
+//! **Noise and predicted error.** The residuals of each kind of data give its noise estimate
+//! (`σ̂² = Σω r² / (Σω − tr(M⁻¹M₂))`, unbiased for independent noise) and λ, their ratio. The
+//! coefficients' covariance is `σ̂² M⁻¹M₂M⁻¹` for heights alone and the cluster-robust
+//! sandwich (one cluster per sample) with slopes. Its (a20, a11, a02) block, pushed through
+//! the first-order change of each principal curvature
 //! (`δk = −2(c² δa20 + cs δa11 + s² δa02)/|∇F|` along the direction `(c, s)`), is the
-//! predicted standard deviation of k1 and k2. On clean data σ̂ measures what the polynomial
-//! cannot represent, which is what the curvature error is made of there too.
+//! predicted standard deviation of k1 and k2.
 //!
-//! **Scale.** Support radii `ρ_j = ρ_0 √2^j` form a ladder; at each point the scale grows
-//! while the confidence intervals `k_j ± Γ sd_j` of every scale so far still intersect, for
-//! k1 and k2 (the intersection of confidence intervals rule, as in [`crate::adaptive`]): on
-//! clean data the smallest, least biased scale is kept, under noise the scale grows until the
-//! bias shows.
+//! **Scale.** Support radii `ρ_j = ρ_0 √2^j` form a ladder, climbed while the confidence
+//! intervals `k_j ± Γ sd_j` of every scale so far intersect and the bias has not overtaken
+//! the scatter; the returned scale has the least estimated `sd² + bias²` ([`choose_scale`]).
+//! `docs/derivation.md` has the details and `mls_ad::jet_witness` recomputes all of it.
 
 use nalgebra::{Cholesky, SMatrix, SVector};
 
