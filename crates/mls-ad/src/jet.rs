@@ -25,6 +25,9 @@ pub struct JetWitness {
     pub degree: usize,
     /// Support radius chosen.
     pub radius: f64,
+    /// Condition number of the fit's normal matrix M (scaled coordinates): rounding in any
+    /// route to the solution may move the coefficients by about `condition · ε` relative.
+    pub condition: f64,
     /// Foot point.
     pub foot: Vector3<f64>,
 }
@@ -48,6 +51,7 @@ fn fit_once(
     degree: usize,
     slopes: bool,
 ) -> Option<(Vec<f64>, Vec<(i32, i32)>, f64, Matrix3<f64>)> {
+    // (The third element is the condition number of M at the final solve.)
     let ex = exponents(degree);
     let m = ex.len();
     // Rows: every height, then (if used) two slope rows per sample with a usable normal.
@@ -133,7 +137,7 @@ fn fit_once(
         // systems the pivot test admits, cond(M) up to 1e10: measured c20 wrong in the third
         // digit where both factorisations of M agree).
         let c = mm.clone().lu().solve(&(a.transpose() * &b))?;
-        let inv = mm.try_inverse()?;
+        let inv = mm.clone().try_inverse()?;
         let (mut rss_h, mut rss_s) = (0.0, 0.0);
         for (phi, y, w) in &a_h {
             let p: f64 = phi.iter().zip(c.iter()).map(|(x, c)| x * c).sum();
@@ -176,7 +180,9 @@ fn fit_once(
             &inv * (&h2 * var_h + &s2 * (lambda * lambda * var_s)) * &inv
         };
         let cov = Matrix3::from_fn(|i, j| cov_full[(3 + i, 3 + j)]);
-        out = Some((c.iter().copied().collect(), ex.clone(), var_h.sqrt(), cov));
+        let eig = mm.clone().symmetric_eigenvalues();
+        let condition = eig.max() / eig.min();
+        out = Some((c.iter().copied().collect(), ex.clone(), condition, cov));
         if use_slopes {
             lambda = if var_s > 0.0 {
                 (var_h / var_s).clamp(1e-4, 1e4)
@@ -290,7 +296,7 @@ pub fn jet_candidates(
             .rev()
             .filter(|&d| equations as f64 >= 1.5 * ((d + 1) * (d + 2) / 2) as f64)
             .find_map(|d| fit_once(&rows, d, slopes).map(|f| (d, f)));
-        let Some((degree, (c, ex, _, cov))) = solution else {
+        let Some((degree, (c, ex, condition, cov))) = solution else {
             if best.is_some() {
                 break;
             }
@@ -313,6 +319,7 @@ pub fn jet_candidates(
             k2: wc.k2,
             sd,
             bias: [0.0; 2],
+            condition,
             degree,
             radius: rho,
             foot,
