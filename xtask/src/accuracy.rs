@@ -561,6 +561,6 @@ const CONCLUSIONS: &str = "
   (target |μ| ≤ 1e-4; 3.7e-5 with estimated normals); estimated normals are not within 1.5× of exact
   ones on the random, jittered, grid, scanline and ellipsoid clouds; the noisy clouds with
   estimated normals miss the σ targets (they were measured with exact normals) and the calibration
-  bound in their top decile; the jet runs at 20–40 k points/s on 2 cores, far from 250 k (the
+  bound in their top decile; the jet runs at 17–40 k points/s on 2 cores (bunny with estimated normals; 200k sphere with file normals), far from 250 k (the
   paper's method keeps that speed).
 ";
