@@ -138,6 +138,9 @@ impl Method {
     }
 }
 
+/// Predicted error, sd, bias, radius/h, squared error and noise of one point (diagnostics).
+type DiagRow = (f64, f64, f64, f64, f64, f64);
+
 /// Per-point `(k1, k2)` and predicted sd (NaN where none).
 struct Estimate {
     k: Vec<[f64; 2]>,
@@ -163,7 +166,7 @@ fn run_method(method: &Method, cloud: &Cloud, normals: &[Vector], h: f64) -> Res
             let s = MlsSurface::new(&cloud.points, normals, MlsConfig::new(h))?;
             let r = s.jet_at_points(&cloud.points, config, Parallelism::Rayon);
             if std::env::var_os("JET_DIAG").is_some() {
-                let mut rows: Vec<(f64, f64, f64, f64, f64, f64)> = r
+                let mut rows: Vec<DiagRow> = r
                     .iter()
                     .zip(&cloud.truth)
                     .filter_map(|(r, t)| {
@@ -183,7 +186,7 @@ fn run_method(method: &Method, cloud: &Cloud, normals: &[Vector], h: f64) -> Res
                 let n = rows.len();
                 for d in 0..10 {
                     let part = &rows[d * n / 10..(d + 1) * n / 10];
-                    let m = |f: &dyn Fn(&(f64, f64, f64, f64, f64, f64)) -> f64| {
+                    let m = |f: &dyn Fn(&DiagRow) -> f64| {
                         part.iter().map(f).sum::<f64>() / part.len() as f64
                     };
                     eprintln!(
@@ -351,16 +354,15 @@ fn estimated_normals(points: &[Point], h: f64) -> Result<Vec<Vector>> {
 pub(crate) fn explore(args: &[String]) -> Result<()> {
     let seed = 1;
     let mut methods = vec![Method::Reference, Method::Paper];
+    // The default, and neighbours of its two chosen constants (the first support and Γ).
     for normals in [mls_core::NormalData::Ignore, mls_core::NormalData::Slopes] {
-        for radius in [1.5] {
-            for confidence in [3.0] {
-                methods.push(Method::Jet(JetConfig {
-                    radius,
-                    confidence,
-                    normals,
-                    ..JetConfig::default()
-                }));
-            }
+        for (radius, confidence) in [(1.5, 3.0), (2.0, 3.0), (1.5, 2.0)] {
+            methods.push(Method::Jet(JetConfig {
+                radius,
+                confidence,
+                normals,
+                ..JetConfig::default()
+            }));
         }
     }
     let only: Option<&String> = args.first();
