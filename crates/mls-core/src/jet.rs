@@ -132,8 +132,8 @@ pub struct JetPoint {
     pub curvature: Curvature,
     /// Predicted standard deviations of k1 and k2 from the noise of the fit.
     pub sd: [f64; 2],
-    /// Estimated bias of k1 and k2 (the disagreement with the neighbouring scale), 0 when
-    /// only one scale was fitted.
+    /// Estimated bias of k1 and k2 at this scale, from the line through the ladder's estimates
+    /// ([`choose_scale`]); 0 when only one scale was fitted.
     pub bias: [f64; 2],
     /// The fit the result comes from.
     pub fit: JetFit,
@@ -221,8 +221,8 @@ impl JetPoint {
 
 /// Whether climbing further cannot lower the error: the previous scale's bias, estimated from
 /// the last step, already exceeds its scatter (`Σ b² > Σ sd²` over k1, k2), or that scatter
-/// is at the rounding floor. Above it the bias
-/// grows fourfold per step while the scatter falls at most √8-fold (`∝ 1/(ρ² √N)`).
+/// is at the rounding floor. Beyond that point the bias grows fourfold per step while the
+/// scatter falls at most √8-fold (`∝ 1/(ρ² √N)`).
 pub fn past_optimum(ladder: &[JetPoint]) -> bool {
     let [.., a, b] = ladder else {
         return false;
