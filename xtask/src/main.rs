@@ -47,6 +47,10 @@ fn main() -> Result<()> {
         println!("{TASKS}");
         return Ok(());
     };
+    if matches!(task.as_str(), "--help" | "-h" | "help") {
+        println!("{TASKS}");
+        return Ok(());
+    }
     let rest = &args[1..];
     match task.as_str() {
         "validate" => validate::run(&validate::Options::parse(rest)?),
