@@ -85,8 +85,8 @@ const FAULTS: &[Fault] = &[
         name: "J4 slope degrees of freedom",
         description: "the slopes' share of the hat matrix's trace counted without the weight λ",
         file: "crates/mls-core/src/jet.rs",
-        original: "slopes.weight - lambda * (inv * sp2).trace()",
-        replacement: "slopes.weight - (inv * sp2).trace()",
+        original: "slopes.weight - lambda * inv.dot(&sp2)",
+        replacement: "slopes.weight - inv.dot(&sp2)",
     },
 ];
 

@@ -483,7 +483,9 @@ fn solve<const N: usize>(
     let mut lambda = if use_slopes { 1.0 } else { 0.0 };
     let rounds = if use_slopes { 2 } else { 1 };
     let mut result = None;
-    for _ in 0..rounds {
+    for round in 0..rounds {
+        // The covariance is kept from the last round only: its sandwich is formed there.
+        let last = round + 1 == rounds;
         let a = hp + sp * lambda;
         let chol = Cholesky::new(a)?;
         // A pivot far below the diagonal's scale means the basis is not determined by the
@@ -509,7 +511,7 @@ fn solve<const N: usize>(
         for row in rows {
             let (phi, y, w) = match *row {
                 Row::Height { phi, z, w } => {
-                    if samples > 0 {
+                    if samples > 0 && use_slopes && last {
                         meat += g * g.transpose();
                     }
                     g.fill(0.0);
@@ -524,17 +526,20 @@ fn solve<const N: usize>(
                 Row::Height { .. } => rss_h += w * r * r,
                 Row::Slope { .. } => rss_s += w / lambda * r * r,
             }
-            if use_slopes {
+            if use_slopes && last {
                 for k in 0..N {
                     g[k] += w * r * phi[k];
                 }
             }
         }
-        meat += g * g.transpose();
+        if use_slopes && last {
+            meat += g * g.transpose();
+        }
         // Degrees of freedom left to each kind of data: Σω − its share of the hat matrix's
         // trace (exact for one kind of data with independent noise).
-        let dof_h = heights.weight - (inv * hp2).trace();
-        let dof_s = slopes.weight - lambda * (inv * sp2).trace();
+        // tr(M⁻¹M₂) as the Frobenius product (both symmetric): 225 products, not 3375.
+        let dof_h = heights.weight - inv.dot(&hp2);
+        let dof_s = slopes.weight - lambda * inv.dot(&sp2);
         if !(dof_h > 0.0) {
             return None;
         }
