@@ -1,8 +1,9 @@
 //! The jet estimator's witness: the same definition (`mls_core::jet`'s documentation) computed
 //! by another route. Its own support (a brute-force distance filter over every sample), its
 //! own tangent basis, the normal equations formed from the dense weighted design matrix and
-//! solved by LU (mls-core accumulates them row by row and uses Cholesky), and the curvature of the fitted surface `F = w − P(u, v)` by
-//! hyper-dual differentiation and a 3 × 3 eigen-decomposition.
+//! solved by LU (mls-core accumulates them row by row and uses Cholesky), a cluster-robust
+//! covariance from per-sample score vectors, and the curvature of the fitted surface
+//! `F = w − P(u, v)` by hyper-dual differentiation and a 3 × 3 eigen-decomposition.
 
 use mls_core::Sample;
 use nalgebra::{DMatrix, DVector, Matrix3, SVector, Vector3};
@@ -108,7 +109,7 @@ fn fit_once(
     let mut lambda = if use_slopes { 1.0 } else { 0.0 };
     let mut out = None;
     for _ in 0..if use_slopes { 2 } else { 1 } {
-        // √ω-scaled dense system, solved by SVD.
+        // The √ω-scaled dense system.
         let n_rows = a_h.len() + a_s.len();
         let mut a = DMatrix::<f64>::zeros(n_rows, m);
         let mut b = DVector::<f64>::zeros(n_rows);
@@ -126,7 +127,7 @@ fn fit_once(
         }
         let mm = a.transpose() * &a;
         // The degeneracy test is defined on M = AᵀΩA's Cholesky pivots (a pivot² below 1e-10
-        // of the largest diagonal entry); the rest of the solve goes through the SVD.
+        // of the largest diagonal entry).
         let diag_max = (0..m).map(|i| mm[(i, i)]).fold(0.0f64, f64::max);
         let chol = nalgebra::Cholesky::new(mm.clone())?;
         let l = chol.l();
