@@ -316,12 +316,14 @@ pub fn eval(a: EvalArgs) -> Result<()> {
                 .map_or(mls_io::FileFormat::Csv, Into::into),
         ),
     };
-    if output.format() == mls_io::FileFormat::Ply
-        && matches!(output, pipeline::Output::Stdout(_))
+    if matches!(
+        output.format(),
+        mls_io::FileFormat::Ply | mls_io::FileFormat::Las | mls_io::FileFormat::Laz
+    ) && matches!(output, pipeline::Output::Stdout(_))
         && std::io::IsTerminal::is_terminal(&std::io::stdout())
     {
         anyhow::bail!(
-            "{}: refusing to write binary PLY to a terminal; redirect it",
+            "{}: refusing to write binary PLY or LAS to a terminal; redirect it",
             pipeline::STDOUT_NAME
         );
     }

@@ -138,7 +138,7 @@ const COLUMNS_HELP: &str = "Names of the columns of a text input (.xyz/.txt/.pts
 /// The output file, and the formats of the input and output.
 #[derive(Debug, Args)]
 struct OutputArgs {
-    /// Output file: .ply (binary little endian unless --ascii), .csv, .xyz/.txt/.pts; `-` for
+    /// Output file: .ply (binary little endian unless --ascii), .csv, .xyz/.txt/.pts, .las/.laz; `-` for
     /// standard output (CSV unless --output-format).
     #[arg(short, long)]
     output: PathBuf,
@@ -174,6 +174,10 @@ enum Format {
     Xyz,
     /// Comma-separated columns with a header row.
     Csv,
+    /// ASPRS LAS (points only on input; computed columns as extra bytes on output).
+    Las,
+    /// LASzip-compressed LAS.
+    Laz,
 }
 
 impl From<Format> for mls_io::FileFormat {
@@ -182,13 +186,16 @@ impl From<Format> for mls_io::FileFormat {
             Format::Ply => Self::Ply,
             Format::Xyz => Self::Xyz,
             Format::Csv => Self::Csv,
+            Format::Las => Self::Las,
+            Format::Laz => Self::Laz,
         }
     }
 }
 
 #[derive(Debug, Args)]
 struct CurvatureArgs {
-    /// Input point cloud: .ply, .xyz/.txt/.pts, or .csv with a header; `-` for standard input.
+    /// Input point cloud: .ply, .xyz/.txt/.pts, .csv with a header, or .las/.laz; `-` for
+    /// standard input.
     input: PathBuf,
     #[command(flatten)]
     out: OutputArgs,
@@ -228,7 +235,7 @@ struct EvalArgs {
     /// Kernel cutoff radius in units of h, or `none`.
     #[arg(long, value_parser = parse_cutoff, default_value = "5", allow_negative_numbers = true)]
     cutoff: mls_core::Cutoff,
-    /// Output file (.csv, .ply, .xyz/.txt/.pts, by extension); standard output (CSV unless
+    /// Output file (.csv, .ply, .xyz/.txt/.pts, .las/.laz, by extension); standard output (CSV unless
     /// --output-format) when absent or `-`.
     #[arg(short, long)]
     output: Option<PathBuf>,

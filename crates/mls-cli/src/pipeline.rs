@@ -62,6 +62,8 @@ fn format_name(format: FileFormat) -> &'static str {
         FileFormat::Ply => "ply",
         FileFormat::Xyz => "xyz",
         FileFormat::Csv => "csv",
+        FileFormat::Las => "las",
+        FileFormat::Laz => "laz",
     }
 }
 
@@ -115,7 +117,7 @@ pub fn read_outcome(
             Some(format) => mls_io::read_point_cloud_as_with(path, format.into(), &options)?,
             None => mls_io::read_point_cloud_with(path, &options).map_err(|e| match e {
                 ReadError::NoExtension { .. } | ReadError::UnknownExtension { .. } => {
-                    anyhow!("{e}; or name the format with --input-format ply|xyz|csv")
+                    anyhow!("{e}; or name the format with --input-format ply|xyz|csv|las|laz")
                 }
                 e => e.into(),
             })?,
@@ -123,11 +125,15 @@ pub fn read_outcome(
     })
 }
 
-/// The format of data without a file name: PLY by its magic word, else CSV if the first line
+/// The format of data without a file name: PLY or LAS/LAZ by its magic word, else CSV if the first line
 /// that is not blank or a `#` comment has a comma (its header row), else XYZ.
 fn sniff(bytes: &[u8]) -> FileFormat {
     if bytes.starts_with(b"ply") {
         return FileFormat::Ply;
+    }
+    // LAS and LAZ alike: the reader takes the compression from the header.
+    if bytes.starts_with(b"LASF") {
+        return FileFormat::Las;
     }
     let first = bytes
         .split(|&b| b == b'\n')
@@ -262,6 +268,9 @@ pub fn check_output(
                 "{STDOUT_NAME}: refusing to write binary PLY to a terminal; redirect it, or add --ascii"
             );
         }
+        if matches!(format, FileFormat::Las | FileFormat::Laz) && std::io::stdout().is_terminal() {
+            bail!("{STDOUT_NAME}: refusing to write binary LAS/LAZ to a terminal; redirect it");
+        }
         return Ok(Output::Stdout(format));
     }
     let name = path.display();
@@ -282,7 +291,7 @@ pub fn check_output(
         ),
         (Some(format), _) | (None, Some(format)) => format,
         (None, None) => bail!(
-            "{name}: {}; expected .ply, .csv, .xyz, .txt or .pts, or name the format with --output-format ply|xyz|csv",
+            "{name}: {}; expected .ply, .csv, .xyz, .txt, .pts, .las or .laz, or name the format with --output-format ply|xyz|csv|las|laz",
             match path.extension() {
                 Some(e) => format!("unknown extension \".{}\"", e.to_string_lossy()),
                 None => "no file extension".to_owned(),

@@ -23,19 +23,23 @@ pub enum ReadError {
         error: io::Error,
     },
     /// The path names a directory, not a file.
-    #[error("{file}: is a directory; expected a point-cloud file (.ply, .xyz, .txt, .pts or .csv)")]
+    #[error(
+        "{file}: is a directory; expected a point-cloud file (.ply, .xyz, .txt, .pts, .csv, .las or .laz)"
+    )]
     IsADirectory {
         /// The path.
         file: String,
     },
     /// The file name has no extension, so its format is unknown.
-    #[error("{file}: no file extension; expected .ply, .xyz, .txt, .pts or .csv")]
+    #[error("{file}: no file extension; expected .ply, .xyz, .txt, .pts, .csv, .las or .laz")]
     NoExtension {
         /// The file.
         file: String,
     },
     /// The file name has an extension that names no supported format.
-    #[error("{file}: unknown extension \".{extension}\"; expected .ply, .xyz, .txt, .pts or .csv")]
+    #[error(
+        "{file}: unknown extension \".{extension}\"; expected .ply, .xyz, .txt, .pts, .csv, .las or .laz"
+    )]
     UnknownExtension {
         /// The file.
         file: String,
@@ -101,10 +105,10 @@ pub enum ReadError {
         /// The names given.
         named: String,
     },
-    /// Column names were given for a PLY file, whose header names its properties.
+    /// Column names were given for a PLY or LAS/LAZ file, whose header names its fields.
     #[error(
-        "{file}: --columns applies to text files (.xyz, .txt, .pts, .csv); a PLY header names \
-         its properties"
+        "{file}: --columns applies to text files (.xyz, .txt, .pts, .csv); a PLY or LAS header \
+         names its fields"
     )]
     ColumnsForPly {
         /// The file.
@@ -159,6 +163,17 @@ pub enum ReadError {
         /// The value, e.g. `vertex 17 property y (float32)`.
         field: String,
     },
+    /// A LAS or LAZ file could not be read: not a LAS file (wrong signature), a header or
+    /// VLR the `las` crate refuses (such as an unsupported point format), data that ends
+    /// before the header's point count, corrupt compressed data, or a coordinate that is not
+    /// finite.
+    #[error("{file}: {message}")]
+    Las {
+        /// The file.
+        file: String,
+        /// What is wrong, e.g. `not a LAS file: …` or `truncated: …`.
+        message: String,
+    },
 }
 
 /// Why a table could not be written. On any of these the destination file is untouched.
@@ -181,13 +196,15 @@ pub enum WriteError {
         file: String,
     },
     /// The destination has no extension, so the output format is unknown.
-    #[error("{file}: no file extension; expected .ply, .csv, .xyz, .txt or .pts")]
+    #[error("{file}: no file extension; expected .ply, .csv, .xyz, .txt, .pts, .las or .laz")]
     NoExtension {
         /// The destination.
         file: String,
     },
     /// The destination's extension names no supported output format.
-    #[error("{file}: unknown extension \".{extension}\"; expected .ply, .csv, .xyz, .txt or .pts")]
+    #[error(
+        "{file}: unknown extension \".{extension}\"; expected .ply, .csv, .xyz, .txt, .pts, .las or .laz"
+    )]
     UnknownExtension {
         /// The destination.
         file: String,
@@ -231,6 +248,33 @@ pub enum WriteError {
         file: String,
         /// The repeated name.
         name: String,
+    },
+    /// LAS output needs the columns `x`, `y` and `z` for the point coordinates.
+    #[error("{file}: no \"{field}\" column; LAS output needs x, y and z")]
+    MissingCoordinate {
+        /// The destination.
+        file: String,
+        /// The missing column.
+        field: &'static str,
+    },
+    /// A coordinate to write as LAS is NaN or infinite: LAS stores coordinates as integer
+    /// steps of a grid.
+    #[error("{file}: column \"{column}\" row {row} is not finite; LAS coordinates must be")]
+    NonFiniteCoordinate {
+        /// The destination.
+        file: String,
+        /// The coordinate column.
+        column: String,
+        /// The row, from 0.
+        row: usize,
+    },
+    /// The `las` crate refused the header or a point.
+    #[error("{file}: LAS: {message}")]
+    Las {
+        /// The destination.
+        file: String,
+        /// The crate's message.
+        message: String,
     },
 }
 

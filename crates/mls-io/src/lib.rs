@@ -1,5 +1,6 @@
 //! Point-cloud readers and writers for mls-curvature: PLY (ASCII and binary, either byte
-//! order), whitespace-separated XYZ/TXT/PTS, and CSV with a header.
+//! order), whitespace-separated XYZ/TXT/PTS, CSV with a header, and LAS/LAZ (through the
+//! `las` crate; points only on input, computed columns as LAS extra bytes on output).
 //!
 //! Readers return a [`PointCloud`] of points and, when the file has all of `nx`, `ny`, `nz`,
 //! normals exactly as stored (not normalised: the caller validates them). A headerless text
@@ -11,8 +12,8 @@
 //! PLY. An empty cloud is not an error; the caller decides.
 //!
 //! Writers take a table of named [`Column`]s (floats as `f64`, integers such as a status code
-//! as `i32`) and write it atomically as PLY, CSV or XYZ; floats round-trip exactly in every
-//! format.
+//! as `i32`) and write it atomically as PLY, CSV, XYZ or LAS/LAZ; floats round-trip exactly in
+//! every format (LAS coordinates excepted: they are stored on the header's grid).
 //!
 //! ```
 //! use mls_io::{PlyFormat, PointCloud, read_ply, write_ply_to};
@@ -31,6 +32,7 @@
 
 mod columns;
 mod error;
+mod las;
 mod lines;
 mod ply;
 mod text;
@@ -44,8 +46,9 @@ pub use columns::{ColumnNames, ReadOptions, UNIT_TOLERANCE};
 pub use error::{ReadError, WriteError};
 pub use text::{read_csv, read_csv_with, read_xyz, read_xyz_with};
 pub use write::{
-    Axis, Column, ColumnData, PlyFormat, write_csv, write_csv_to, write_ply, write_ply_to,
-    write_point_cloud, write_point_cloud_as, write_point_cloud_to, write_xyz, write_xyz_to,
+    Axis, Column, ColumnData, PlyFormat, write_csv, write_csv_to, write_las, write_ply,
+    write_ply_to, write_point_cloud, write_point_cloud_as, write_point_cloud_to, write_xyz,
+    write_xyz_to,
 };
 
 /// The fields the readers look for, in the order of the slots of a row.
@@ -116,6 +119,10 @@ pub enum FileFormat {
     Xyz,
     /// `.csv`: comma-separated columns with a header row.
     Csv,
+    /// `.las`: ASPRS LAS. Read as LAS or LAZ, whichever the header says.
+    Las,
+    /// `.laz`: LASzip-compressed LAS. Read as LAS or LAZ, whichever the header says.
+    Laz,
 }
 
 impl FileFormat {
@@ -125,6 +132,8 @@ impl FileFormat {
             "ply" => Some(Self::Ply),
             "xyz" | "txt" | "pts" => Some(Self::Xyz),
             "csv" => Some(Self::Csv),
+            "las" => Some(Self::Las),
+            "laz" => Some(Self::Laz),
             _ => None,
         }
     }
@@ -142,7 +151,8 @@ fn detect_format(path: &Path) -> Result<FileFormat, Option<String>> {
 }
 
 /// Reads a point cloud, choosing the reader by the file's extension (case-insensitive):
-/// `.ply` ([`read_ply`]), `.xyz`, `.txt`, `.pts` ([`read_xyz`]) or `.csv` ([`read_csv`]).
+/// `.ply` ([`read_ply`]), `.xyz`, `.txt`, `.pts` ([`read_xyz`]), `.csv` ([`read_csv`]), or
+/// `.las`, `.laz` (points only: LAS has no normals; [`ReadError::Las`] names what is wrong).
 /// The readers' notes are dropped; [`read_point_cloud_with`] returns them.
 ///
 /// # Errors
@@ -200,7 +210,9 @@ pub fn read_point_cloud_as_with(
     if path.is_dir() {
         return Err(ReadError::IsADirectory { file });
     }
-    if format == FileFormat::Ply && options.columns.is_some() {
+    if matches!(format, FileFormat::Ply | FileFormat::Las | FileFormat::Laz)
+        && options.columns.is_some()
+    {
         return Err(ReadError::ColumnsForPly { file });
     }
     let opened = File::open(path).map_err(|error| ReadError::Io {
@@ -216,6 +228,10 @@ pub fn read_point_cloud_as_with(
         }),
         FileFormat::Xyz => read_xyz_with(reader, &file, options),
         FileFormat::Csv => read_csv_with(reader, &file, options),
+        FileFormat::Las | FileFormat::Laz => las::read(reader, &file).map(|cloud| ReadOutcome {
+            cloud,
+            notes: Vec::new(),
+        }),
     }
 }
 
@@ -245,15 +261,23 @@ pub fn read_point_cloud_from_with(
     options: &ReadOptions,
 ) -> Result<ReadOutcome, ReadError> {
     match format {
-        FileFormat::Ply if options.columns.is_some() => Err(ReadError::ColumnsForPly {
-            file: name.to_owned(),
-        }),
+        FileFormat::Ply | FileFormat::Las | FileFormat::Laz if options.columns.is_some() => {
+            Err(ReadError::ColumnsForPly {
+                file: name.to_owned(),
+            })
+        }
         FileFormat::Ply => read_ply(reader, name).map(|cloud| ReadOutcome {
             cloud,
             notes: Vec::new(),
         }),
         FileFormat::Xyz => read_xyz_with(reader, name, options),
         FileFormat::Csv => read_csv_with(reader, name, options),
+        FileFormat::Las | FileFormat::Laz => {
+            las::read_stream(reader, name).map(|cloud| ReadOutcome {
+                cloud,
+                notes: Vec::new(),
+            })
+        }
     }
 }
 

@@ -1,4 +1,5 @@
-//! Writers: a table of named columns to PLY (binary little-endian or ASCII), CSV or XYZ.
+//! Writers: a table of named columns to PLY (binary little-endian or ASCII), CSV, XYZ, or
+//! LAS/LAZ (in `las.rs`).
 //!
 //! Files are written atomically: into a temporary file in the destination's directory, which
 //! is flushed, synced and then renamed over the destination. On any error the temporary file
@@ -28,7 +29,7 @@ pub enum Axis {
 }
 
 impl Axis {
-    fn of(self, v: &[f64; 3]) -> f64 {
+    pub(crate) fn of(self, v: &[f64; 3]) -> f64 {
         let [x, y, z] = *v;
         match self {
             Self::X => x,
@@ -126,8 +127,8 @@ pub enum PlyFormat {
 }
 
 /// Writes `columns` to `path` in the format its extension names (case-insensitive): `.ply`
-/// (in `ply_format`), `.csv`, or `.xyz`, `.txt`, `.pts` (space-separated after a `#` line of
-/// column names).
+/// (in `ply_format`), `.csv`, `.xyz`, `.txt`, `.pts` (space-separated after a `#` line of
+/// column names), or `.las`, `.laz` ([`write_las`]).
 ///
 /// For points and normals only, pass [`PointCloud::columns`](crate::PointCloud::columns).
 ///
@@ -161,6 +162,8 @@ pub fn write_point_cloud_as(
         FileFormat::Ply => write_ply(path, columns, ply_format),
         FileFormat::Csv => write_csv(path, columns),
         FileFormat::Xyz => write_xyz(path, columns),
+        FileFormat::Las => write_las(path, columns, false),
+        FileFormat::Laz => write_las(path, columns, true),
     }
 }
 
@@ -180,6 +183,8 @@ pub fn write_point_cloud_to(
         FileFormat::Ply => write_ply_to(writer, name, columns, ply_format),
         FileFormat::Csv => write_csv_to(writer, name, columns),
         FileFormat::Xyz => write_xyz_to(writer, name, columns),
+        FileFormat::Las => crate::las::write_stream(writer, name, columns, false),
+        FileFormat::Laz => crate::las::write_stream(writer, name, columns, true),
     }
 }
 
@@ -224,6 +229,24 @@ pub fn write_xyz(path: &Path, columns: &[Column<'_>]) -> Result<(), WriteError> 
     let rows = validate(&file, columns)?;
     write_atomically(path, |out| {
         write_text_rows(out, &file, columns, rows, ' ', TextHeader::Comment)
+    })
+}
+
+/// Writes `columns` as LAS 1.4 (point format 6), or LAZ if `compressed`, atomically: the
+/// columns `x`, `y`, `z` as the point coordinates, on a decimal grid of 1e-8 to 1e-7 of the
+/// bounding box's largest extent with the offset at its minimum; every other column, in order,
+/// as a named LAS extra-bytes attribute (`double` for float columns, `long` (i32) for integer
+/// ones), which PDAL, laspy and CloudCompare show as dimensions.
+///
+/// # Errors
+/// Those of [`write_ply`], [`WriteError::MissingCoordinate`] without an `x`, `y` or `z` column,
+/// [`WriteError::NonFiniteCoordinate`], [`WriteError::InvalidColumnName`] for a name over 32
+/// characters, and [`WriteError::Las`].
+pub fn write_las(path: &Path, columns: &[Column<'_>], compressed: bool) -> Result<(), WriteError> {
+    let file = path.display().to_string();
+    validate(&file, columns)?;
+    write_atomically(path, |out| {
+        crate::las::write_file(out, &file, columns, compressed)
     })
 }
 
@@ -282,7 +305,7 @@ fn io_error(file: &str) -> impl FnOnce(std::io::Error) -> WriteError + '_ {
 }
 
 /// Checks the columns before anything is written; returns the number of rows.
-fn validate(file: &str, columns: &[Column<'_>]) -> Result<usize, WriteError> {
+pub(crate) fn validate(file: &str, columns: &[Column<'_>]) -> Result<usize, WriteError> {
     let Some(first) = columns.first() else {
         return Err(WriteError::NoColumns {
             file: file.to_owned(),

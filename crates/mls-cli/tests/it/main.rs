@@ -13,6 +13,7 @@ mod eval_options;
 mod help_flag;
 mod info;
 mod large_h;
+mod las;
 mod normals;
 mod overwrite;
 mod project;

@@ -2,6 +2,7 @@
 
 mod atomic;
 mod fuzz;
+mod las;
 mod malformed;
 mod ply_fixtures;
 mod roundtrip;
@@ -11,6 +12,8 @@ mod text;
 pub mod seeds {
     /// Values for the round-trip tables.
     pub const ROUND_TRIP: u64 = 0x10_0001;
+    /// The generated LAS/LAZ table.
+    pub const LAS: u64 = 0x10_0002;
 }
 
 /// Checks the rules every error message follows (one line, starting with the file name) and

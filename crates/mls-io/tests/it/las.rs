@@ -1,0 +1,317 @@
+//! LAS and LAZ: tables written by mls-io and read back with the `las` crate itself, clouds
+//! written by the `las` crate and read by mls-io, and bad files.
+
+use std::path::Path;
+
+use las::point::Format;
+use las::{Builder, Point, Reader, Transform, Vector, Version, Writer};
+use mls_io::{
+    Axis, Column, FileFormat, PlyFormat, ReadError, read_point_cloud, read_point_cloud_as,
+    read_point_cloud_from, write_point_cloud, write_point_cloud_to,
+};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+use crate::{assert_message, seeds};
+
+const ROWS: usize = 257;
+
+/// A generated table: points in a box far from the origin (as georeferenced data is), two
+/// float columns with values of every magnitude, and an integer status.
+struct Table {
+    points: Vec<[f64; 3]>,
+    k1: Vec<f64>,
+    k1_sd: Vec<f64>,
+    status: Vec<i32>,
+}
+
+impl Table {
+    fn new() -> Self {
+        let mut rng = ChaCha8Rng::seed_from_u64(seeds::LAS);
+        let points = (0..ROWS)
+            .map(|_| {
+                [
+                    500_000.0 + rng.random_range(0.0..300.0),
+                    4_000_000.0 + rng.random_range(0.0..200.0),
+                    rng.random_range(-20.0..80.0),
+                ]
+            })
+            .collect();
+        let k1 = (0..ROWS)
+            .map(|_| rng.random_range(-1.0..1.0) * 10f64.powi(rng.random_range(-300..300)))
+            .collect();
+        let k1_sd = (0..ROWS).map(|_| rng.random::<f64>()).collect();
+        let status = (0..ROWS).map(|_| rng.random_range(-5..5)).collect();
+        Self {
+            points,
+            k1,
+            k1_sd,
+            status,
+        }
+    }
+
+    fn columns(&self) -> Vec<Column<'_>> {
+        vec![
+            Column::component("x", &self.points, Axis::X),
+            Column::component("y", &self.points, Axis::Y),
+            Column::component("z", &self.points, Axis::Z),
+            Column::f64("k1", &self.k1),
+            Column::f64("k1_sd", &self.k1_sd),
+            Column::i32("status", &self.status),
+        ]
+    }
+}
+
+/// The names and data types of the Extra Bytes VLR's descriptors.
+fn extra_bytes_schema(reader: &Reader) -> Vec<(String, u8)> {
+    let vlr = reader
+        .header()
+        .all_vlrs()
+        .find(|v| v.user_id == "LASF_Spec" && v.record_id == 4)
+        .expect("no Extra Bytes VLR");
+    assert_eq!(vlr.data.len() % 192, 0);
+    vlr.data
+        .chunks(192)
+        .map(|d| {
+            let name = &d[4..36];
+            let end = name.iter().position(|&b| b == 0).unwrap_or(32);
+            (String::from_utf8(name[..end].to_vec()).unwrap(), d[2])
+        })
+        .collect()
+}
+
+fn check_written(path: &Path, table: &Table, compressed: bool) {
+    let mut reader = Reader::from_path(path).unwrap();
+    let header = reader.header().clone();
+    assert_eq!(header.number_of_points(), ROWS as u64);
+    assert_eq!(header.version(), Version::new(1, 4));
+    assert_eq!(header.point_format().is_compressed, compressed);
+    assert_eq!(header.point_format().extra_bytes, 8 + 8 + 4);
+    assert_eq!(
+        extra_bytes_schema(&reader),
+        [
+            ("k1".to_owned(), 10),
+            ("k1_sd".to_owned(), 10),
+            ("status".to_owned(), 6)
+        ]
+    );
+    // The documented grid: a power of ten between 1e-8 and 1e-7 of the largest extent (300).
+    let scale = header.transforms().x.scale;
+    assert!((1e-6..=1e-5).contains(&scale), "scale {scale}");
+    assert_eq!(scale, 1e-5);
+    let points: Vec<Point> = reader
+        .read_all()
+        .unwrap()
+        .points()
+        .map(Result::unwrap)
+        .collect();
+    assert_eq!(points.len(), ROWS);
+    for (i, p) in points.iter().enumerate() {
+        let [x, y, z] = table.points[i];
+        for (got, want) in [(p.x, x), (p.y, y), (p.z, z)] {
+            // Half a step, and the rounding of offset + scale × n in f64.
+            assert!(
+                (got - want).abs() <= 0.5 * scale * (1.0 + 1e-6),
+                "row {i}: {got} vs {want}"
+            );
+        }
+        let e = &p.extra_bytes;
+        assert_eq!(e.len(), 20);
+        let k1 = f64::from_le_bytes(e[0..8].try_into().unwrap());
+        let k1_sd = f64::from_le_bytes(e[8..16].try_into().unwrap());
+        let status = i32::from_le_bytes(e[16..20].try_into().unwrap());
+        assert_eq!(k1.to_bits(), table.k1[i].to_bits(), "row {i} k1");
+        assert_eq!(k1_sd.to_bits(), table.k1_sd[i].to_bits(), "row {i} k1_sd");
+        assert_eq!(status, table.status[i], "row {i} status");
+    }
+}
+
+#[test]
+fn las_and_laz_round_trip_through_the_las_crate() {
+    let dir = tempfile::tempdir().unwrap();
+    let table = Table::new();
+    for (name, compressed) in [("out.las", false), ("out.LAZ", true)] {
+        let path = dir.path().join(name);
+        write_point_cloud(&path, &table.columns(), PlyFormat::default()).unwrap();
+        check_written(&path, &table, compressed);
+        // And mls-io reads its own output back: the points on the grid, no normals.
+        let cloud = read_point_cloud(&path).unwrap();
+        assert_eq!(cloud.len(), ROWS);
+        assert!(cloud.normals.is_none());
+        for (got, want) in cloud.points.iter().zip(&table.points) {
+            for k in 0..3 {
+                assert!((got[k] - want[k]).abs() <= 0.51e-5, "{got:?} vs {want:?}");
+            }
+        }
+    }
+    // Only the two outputs: the temporary files are gone.
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 2);
+}
+
+#[test]
+fn las_and_laz_to_a_stream_read_back() {
+    let table = Table::new();
+    for format in [FileFormat::Las, FileFormat::Laz] {
+        let mut bytes = Vec::new();
+        write_point_cloud_to(
+            &mut bytes,
+            "-",
+            format,
+            &table.columns(),
+            PlyFormat::default(),
+        )
+        .unwrap();
+        assert!(bytes.starts_with(b"LASF"));
+        let cloud = read_point_cloud_from(&bytes[..], "-", format).unwrap();
+        assert_eq!(cloud.len(), ROWS);
+        for (got, want) in cloud.points.iter().zip(&table.points) {
+            for k in 0..3 {
+                assert!((got[k] - want[k]).abs() <= 0.51e-5, "{got:?} vs {want:?}");
+            }
+        }
+    }
+}
+
+/// A LAS file written by the `las` crate alone, in a pre-1.4 point format with colour.
+fn write_with_las_crate(path: &Path, points: &[[f64; 3]], compressed: bool) {
+    let mut builder = Builder::from(Version::new(1, 2));
+    let mut format = Format::new(3).unwrap();
+    format.is_compressed = compressed;
+    builder.point_format = format;
+    let t = Transform {
+        scale: 0.001,
+        offset: 100.0,
+    };
+    builder.transforms = Vector { x: t, y: t, z: t };
+    let file = std::io::BufWriter::new(std::fs::File::create(path).unwrap());
+    let mut writer = Writer::new(file, builder.into_header().unwrap()).unwrap();
+    for &[x, y, z] in points {
+        writer
+            .write_point(Point {
+                x,
+                y,
+                z,
+                gps_time: Some(1.0),
+                color: Some(las::Color::new(1, 2, 3)),
+                ..Point::default()
+            })
+            .unwrap();
+    }
+    writer.close().unwrap();
+}
+
+#[test]
+fn mls_io_reads_las_and_laz_written_by_the_las_crate() {
+    let dir = tempfile::tempdir().unwrap();
+    let points: Vec<[f64; 3]> = (0..1000)
+        .map(|i| {
+            let i = f64::from(i);
+            [100.0 + i * 0.001, 101.5 - i * 0.002, 99.0 + i * 0.003]
+        })
+        .collect();
+    for (name, compressed) in [("in.las", false), ("in.laz", true)] {
+        let path = dir.path().join(name);
+        write_with_las_crate(&path, &points, compressed);
+        let cloud = read_point_cloud(&path).unwrap();
+        assert!(cloud.normals.is_none());
+        assert_eq!(cloud.len(), points.len());
+        for (got, want) in cloud.points.iter().zip(&points) {
+            for k in 0..3 {
+                assert!((got[k] - want[k]).abs() < 1e-9, "{got:?} vs {want:?}");
+            }
+        }
+        // The same through a stream (standard input), and whatever the extension.
+        let bytes = std::fs::read(&path).unwrap();
+        let streamed = read_point_cloud_from(&bytes[..], "-", FileFormat::Las).unwrap();
+        assert_eq!(streamed, cloud);
+        let renamed = dir.path().join(format!("{name}.bin"));
+        std::fs::copy(&path, &renamed).unwrap();
+        assert_eq!(
+            read_point_cloud_as(&renamed, FileFormat::Las).unwrap(),
+            cloud
+        );
+    }
+}
+
+#[test]
+fn a_file_that_is_not_las_is_an_error_naming_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("fake.las");
+    std::fs::write(&path, "x y z\n1 2 3\n").unwrap();
+    let err = read_point_cloud(&path).unwrap_err();
+    assert!(matches!(err, ReadError::Las { .. }), "{err:?}");
+    assert_message(&err, &path.display().to_string(), &["not a LAS file"]);
+    // A file shorter than the LAS header.
+    std::fs::write(&path, b"LASF").unwrap();
+    let err = read_point_cloud(&path).unwrap_err();
+    assert_message(&err, &path.display().to_string(), &["truncated"]);
+}
+
+#[test]
+fn truncated_point_data_is_an_error_naming_the_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let points: Vec<[f64; 3]> = (0..500).map(|i| [f64::from(i), 0.0, 1.0]).collect();
+    for (name, compressed) in [("cut.las", false), ("cut.laz", true)] {
+        let path = dir.path().join(name);
+        write_with_las_crate(&path, &points, compressed);
+        let bytes = std::fs::read(&path).unwrap();
+        std::fs::write(&path, &bytes[..bytes.len() * 2 / 3]).unwrap();
+        let err = read_point_cloud(&path).unwrap_err();
+        assert!(matches!(err, ReadError::Las { .. }), "{err:?}");
+        let message = assert_message(&err, &path.display().to_string(), &[]);
+        assert!(message.contains("truncated"), "{message}");
+        if !compressed {
+            assert!(message.contains("500 points"), "{message}");
+        }
+    }
+}
+
+/// Corrupt compressed data: an error or a wrong cloud, never a crash. (LASzip has no
+/// checksums, so garbage may decode to points.)
+#[test]
+fn corrupt_laz_does_not_crash() {
+    let dir = tempfile::tempdir().unwrap();
+    let points: Vec<[f64; 3]> = (0..500).map(|i| [f64::from(i), 0.0, 1.0]).collect();
+    let path = dir.path().join("bad.laz");
+    write_with_las_crate(&path, &points, true);
+    let mut bytes = std::fs::read(&path).unwrap();
+    // In the compressed points: after the offset to the point data (header bytes 96..100)
+    // and the 8-byte offset of the chunk table that starts them.
+    let data = u32::from_le_bytes(bytes[96..100].try_into().unwrap()) as usize;
+    let start = data + 8 + 16;
+    for b in &mut bytes[start..start + 64] {
+        *b = b.wrapping_mul(31).wrapping_add(7);
+    }
+    std::fs::write(&path, &bytes).unwrap();
+    if let Err(err) = read_point_cloud(&path) {
+        let message = assert_message(&err, &path.display().to_string(), &[]);
+        eprintln!("{message}");
+    }
+}
+
+#[test]
+fn las_output_needs_finite_x_y_z() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("out.las");
+    let xs = [1.0, 2.0];
+    let err = write_point_cloud(
+        &path,
+        &[Column::f64("x", &xs), Column::f64("y", &xs)],
+        PlyFormat::default(),
+    )
+    .unwrap_err();
+    assert_message(&err, &path.display().to_string(), &["\"z\""]);
+    let bad = [1.0, f64::NAN];
+    let err = write_point_cloud(
+        &path,
+        &[
+            Column::f64("x", &xs),
+            Column::f64("y", &xs),
+            Column::f64("z", &bad),
+        ],
+        PlyFormat::default(),
+    )
+    .unwrap_err();
+    assert_message(&err, &path.display().to_string(), &["\"z\" row 1"]);
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
+}
