@@ -237,8 +237,28 @@ fn coordinate_scale(extent: f64) -> f64 {
     }
 }
 
+/// The description written for a column `mlscurv` produces (at most 32 bytes, shown by PDAL,
+/// laspy and CloudCompare beside the name); other columns get none.
+fn description(name: &str) -> &'static str {
+    match name {
+        "nx" | "ny" | "nz" => "unit surface normal",
+        "k1" => "larger principal curvature",
+        "k2" => "smaller principal curvature",
+        "mean" => "mean curvature (k1 + k2)/2",
+        "gauss" => "Gaussian curvature k1 k2",
+        "d1x" | "d1y" | "d1z" => "unit direction of k1",
+        "d2x" | "d2y" | "d2z" => "unit direction of k2",
+        "k1_sd" => "predicted error of k1",
+        "k2_sd" => "predicted error of k2",
+        "h" => "chosen Gaussian scale h",
+        "noise" => "estimated position noise",
+        "status" => "0 ok; codes: mlscurv --help",
+        _ => "",
+    }
+}
+
 /// One 192-byte extra-bytes descriptor (LAS 1.4 R15, table 24): no options (no no-data,
-/// min, max, scale or offset), the name, no description.
+/// min, max, scale or offset), the name and, for `mlscurv`'s columns, a description.
 fn descriptor(column: &Column<'_>) -> [u8; DESCRIPTOR_BYTES] {
     let mut d = [0u8; DESCRIPTOR_BYTES];
     // Bytes 0–1 reserved; 2 data type; 3 options; 4–35 name; then unused, no_data, min,
@@ -249,6 +269,8 @@ fn descriptor(column: &Column<'_>) -> [u8; DESCRIPTOR_BYTES] {
     };
     let name = column.name.as_bytes();
     d[4..4 + name.len()].copy_from_slice(name);
+    let text = description(column.name).as_bytes();
+    d[DESCRIPTOR_BYTES - 32..DESCRIPTOR_BYTES - 32 + text.len()].copy_from_slice(text);
     d
 }
 
@@ -392,4 +414,18 @@ pub(crate) fn write_stream(
             file: file.to_owned(),
             error,
         })
+}
+
+#[cfg(test)]
+mod description_tests {
+    /// Every description fits the descriptor's 32 bytes.
+    #[test]
+    fn descriptions_fit() {
+        for name in [
+            "nx", "k1", "k2", "mean", "gauss", "d1x", "d2z", "k1_sd", "k2_sd", "h", "noise",
+            "status", "other",
+        ] {
+            assert!(super::description(name).len() <= 32, "{name}");
+        }
+    }
 }

@@ -62,6 +62,45 @@ impl Table {
     }
 }
 
+/// The descriptions of the Extra Bytes VLR's descriptors (the last 32 bytes of each).
+fn extra_bytes_descriptions(reader: &Reader) -> Vec<String> {
+    let vlr = reader
+        .header()
+        .all_vlrs()
+        .find(|v| v.user_id == "LASF_Spec" && v.record_id == 4)
+        .expect("no Extra Bytes VLR");
+    vlr.data
+        .chunks(192)
+        .map(|d| {
+            let text = &d[160..192];
+            let end = text.iter().position(|&b| b == 0).unwrap_or(32);
+            String::from_utf8(text[..end].to_vec()).unwrap()
+        })
+        .collect()
+}
+
+#[test]
+fn curvature_columns_carry_descriptions() {
+    let table = Table::new();
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("described.las");
+    mls_io::write_point_cloud(
+        &path,
+        &table.columns(),
+        mls_io::PlyFormat::BinaryLittleEndian,
+    )
+    .unwrap();
+    let reader = Reader::from_path(&path).unwrap();
+    assert_eq!(
+        extra_bytes_descriptions(&reader),
+        [
+            "larger principal curvature",
+            "predicted error of k1",
+            "0 ok; codes: mlscurv --help"
+        ]
+    );
+}
+
 /// The names and data types of the Extra Bytes VLR's descriptors.
 fn extra_bytes_schema(reader: &Reader) -> Vec<(String, u8)> {
     let vlr = reader
