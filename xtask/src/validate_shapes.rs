@@ -353,7 +353,7 @@ pub(crate) fn analytic_checks(quick: bool) -> Result<Analytic> {
                 md,
                 "| {} | {} | {at} | {} | {:+.2e} ± {:.2e} | {:+.2e} ± {:.2e} | {:+.2e}, {:+.2e} | {:.2e} | {:.1e} | {:.0e}, {:.0e}, {:.0e} | {} |",
                 shape.name,
-                shape.setup,
+                shape.setup.replace('|', "\\|"),
                 st.n,
                 st.mean(0),
                 st.std(0),
