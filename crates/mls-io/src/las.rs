@@ -48,6 +48,8 @@ where
     };
     let mut reader = Reader::new(read).map_err(|e| error(header_message(&e)))?;
     let expected = reader.header().number_of_points();
+    let normal_offsets = normal_extra_bytes(reader.header());
+    let mut normals = normal_offsets.map(|_| Vec::with_capacity(0));
     let capacity = usize::try_from(expected.min(MAX_PREALLOCATED)).unwrap_or(0);
     let mut points = Vec::with_capacity(capacity);
     let mut done: u64 = 0;
@@ -80,12 +82,60 @@ where
             }
             points.push([x, y, z]);
         }
+        // Extra bytes close each record (`Format::len` counts them).
+        let format = data.format();
+        let base = format
+            .len()
+            .checked_sub(format.extra_bytes)
+            .map(usize::from);
+        if let (Some(offsets), Some(normals), Some(base)) = (normal_offsets, normals.as_mut(), base)
+        {
+            let record = data.record_len();
+            for raw in data.raw_bytes().chunks_exact(record) {
+                normals.push(offsets.map(|o| {
+                    let at = base + o;
+                    raw.get(at..at + 8)
+                        .and_then(|b| b.try_into().ok())
+                        .map_or(f64::NAN, f64::from_le_bytes)
+                }));
+            }
+        }
         done += data.len() as u64;
     }
-    Ok(PointCloud {
-        points,
-        normals: None,
-    })
+    Ok(PointCloud { points, normals })
+}
+
+/// Offsets within each point's extra bytes of `f64` attributes named `nx`, `ny`, `nz` (as
+/// `mlscurv` writes them), when the Extra Bytes VLR declares all three.
+fn normal_extra_bytes(header: &las::Header) -> Option<[usize; 3]> {
+    let vlr = header
+        .all_vlrs()
+        .find(|v| v.user_id == EXTRA_BYTES_USER_ID && v.record_id == EXTRA_BYTES_RECORD_ID)?;
+    let mut offset = 0;
+    let mut found = [None; 3];
+    for d in vlr.data.chunks_exact(DESCRIPTOR_BYTES) {
+        // Sizes of the LAS 1.4 data types 1–10; type 0 keeps its size in the options byte.
+        let size = match d[2] {
+            0 => usize::from(d[3]),
+            1 | 2 => 1,
+            3 | 4 => 2,
+            5 | 6 | 9 => 4,
+            7 | 8 | 10 => 8,
+            _ => return None,
+        };
+        let name = &d[4..36];
+        let name = &name[..name.iter().position(|&b| b == 0).unwrap_or(32)];
+        if let Some(i) = [&b"nx"[..], b"ny", b"nz"].iter().position(|n| *n == name)
+            && d[2] == TYPE_F64
+        {
+            found[i] = Some(offset);
+        }
+        offset += size;
+    }
+    match found {
+        [Some(x), Some(y), Some(z)] => Some([x, y, z]),
+        _ => None,
+    }
 }
 
 /// The message for an error while reading the header.

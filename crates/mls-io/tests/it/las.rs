@@ -354,3 +354,29 @@ fn las_output_needs_finite_x_y_z() {
     assert_message(&err, &path.display().to_string(), &["\"z\" row 1"]);
     assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
 }
+
+/// Normals written as the `nx ny nz` extra bytes (what `mlscurv normals -o x.las` writes) are
+/// read back as the cloud's normals, bit for bit.
+#[test]
+fn normals_written_as_extra_bytes_are_read_back() {
+    let table = Table::new();
+    let normals: Vec<[f64; 3]> = table
+        .points
+        .iter()
+        .map(|p| {
+            let len = (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt();
+            [p[0] / len, p[1] / len, p[2] / len]
+        })
+        .collect();
+    let mut columns = table.columns();
+    columns.insert(3, Column::component("nx", &normals, Axis::X));
+    columns.insert(4, Column::component("ny", &normals, Axis::Y));
+    columns.insert(5, Column::component("nz", &normals, Axis::Z));
+    let dir = tempfile::tempdir().unwrap();
+    for name in ["normals.las", "normals.laz"] {
+        let path = dir.path().join(name);
+        mls_io::write_point_cloud(&path, &columns, mls_io::PlyFormat::BinaryLittleEndian).unwrap();
+        let cloud = mls_io::read_point_cloud(&path).unwrap();
+        assert_eq!(cloud.normals.as_deref(), Some(&normals[..]), "{name}");
+    }
+}
