@@ -61,15 +61,11 @@ impl Cloud {
     }
 }
 
-fn surface_points(samples: &[mls_shapes::Sample]) -> Vec<SurfacePoint> {
-    samples.iter().map(|s| s.surface).collect()
-}
-
 /// The cloud classes of issue 11, for one seed.
 pub(crate) fn clouds(seed: u64) -> Vec<Cloud> {
     let torus = Torus::new(6.0, 2.0);
     let paper = Torus::new(1.0, 0.2);
-    let sp = surface_points;
+    let sp = mls_shapes::surface_points;
     let mut out = vec![
         Cloud::from_samples(
             "torus 6/2, random 10k".into(),
@@ -93,10 +89,11 @@ pub(crate) fn clouds(seed: u64) -> Vec<Cloud> {
         ),
         Cloud::from_samples(
             "ellipsoid 3/2/1, random 20k".into(),
-            &mls_shapes::random_area_uniform(&Ellipsoid::new(3.0, 2.0, 1.0), 20_000, seed)
-                .iter()
-                .map(|s| s.surface)
-                .collect::<Vec<_>>(),
+            &sp(&mls_shapes::random_area_uniform(
+                &Ellipsoid::new(3.0, 2.0, 1.0),
+                20_000,
+                seed,
+            )),
         ),
     ];
     let grid = sp(&mls_shapes::grid(&paper, 500, 100));

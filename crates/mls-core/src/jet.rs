@@ -295,11 +295,12 @@ fn bias_growth(ladder: &[JetPoint]) -> [f64; 2] {
     })
 }
 
-/// Fits a jet to `samples` (positions relative to the query, any orientation) in the frame
-/// `(t1, t2, n)`, within the support radius `radius`. Returns `None` when no degree ≥ 2 is
+/// Fits a jet to the `samples` within the support radius `radius` of `centre` (the query, in
+/// the samples' frame), in the frame `(t1, t2, n)`. Returns `None` when no degree ≥ 2 is
 /// determined.
 pub fn fit(
     samples: &[Sample],
+    centre: &Point,
     frame: &(Vector, Vector, Vector),
     radius: f64,
     degree: usize,
@@ -315,7 +316,7 @@ pub fn fit(
     let mut slope_rows = 0;
     let rows = &mut scratch.rows;
     rows.clear();
-    for_each_row(samples, frame, inv_r2, radius, normals, |row| {
+    for_each_row(samples, centre, frame, inv_r2, radius, normals, |row| {
         rows.push(row)
     });
     for row in rows.iter() {
@@ -391,6 +392,7 @@ enum Row {
 /// Calls `f` with every equation the samples within the support give.
 fn for_each_row(
     samples: &[Sample],
+    centre: &Point,
     frame: &(Vector, Vector, Vector),
     inv_r2: f64,
     radius: f64,
@@ -399,7 +401,7 @@ fn for_each_row(
 ) {
     let (t1, t2, n) = frame;
     for sample in samples {
-        let d = sample.point.coords;
+        let d = sample.point - centre;
         let s = d.norm_squared() * inv_r2;
         if !(s < 1.0) {
             continue;

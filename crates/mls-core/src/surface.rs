@@ -157,7 +157,6 @@ impl MlsSurface {
             candidates: Vec::new(),
             scratch: FieldScratch::default(),
             line: Vec::new(),
-            offsets: Vec::new(),
             ladder: Vec::new(),
             jet_scratch: jet::JetScratch::default(),
         }
@@ -323,8 +322,6 @@ pub struct Evaluator<'a> {
     candidates: Vec<Sample>,
     scratch: FieldScratch,
     line: Vec<LineBlock>,
-    /// Samples relative to the query, for the jet fits.
-    offsets: Vec<Sample>,
     /// The jet's fits up the ladder of scales at one query.
     ladder: Vec<JetPoint>,
     jet_scratch: jet::JetScratch,
@@ -375,13 +372,9 @@ impl Evaluator<'_> {
             let Some(frame) = frame else {
                 return Err(PointStatus::NormalUndefined);
             };
-            self.offsets.clear();
-            self.offsets.extend(self.support.iter().map(|s| Sample {
-                point: Point::from(s.point - local),
-                normal: s.normal,
-            }));
             let Some(fit) = jet::fit(
-                &self.offsets,
+                &self.support,
+                &local,
                 &frame,
                 radius,
                 config.degree,

@@ -55,10 +55,7 @@ fn error_falls_with_density_on_random_samples() {
     let torus = Torus::new(6.0, 2.0);
     let mut k1 = Vec::new();
     for n in [10_000, 40_000] {
-        let samples: Vec<SurfacePoint> = mls_shapes::random_area_uniform(&torus, n, SEED)
-            .iter()
-            .map(|s| s.surface)
-            .collect();
+        let samples = mls_shapes::surface_points(&mls_shapes::random_area_uniform(&torus, n, SEED));
         let points: Vec<Point> = samples.iter().map(|s| s.point).collect();
         let e = errors(&samples, &points, cli_h(&points), n / 2000);
         k1.push(nrms(&e, 0, 0.5));
@@ -83,10 +80,7 @@ fn error_falls_with_density_on_random_samples() {
 fn predicted_error_is_calibrated_by_decile() {
     let torus = Torus::new(6.0, 2.0);
     let n = 20_000;
-    let samples: Vec<SurfacePoint> = mls_shapes::random_area_uniform(&torus, n, SEED)
-        .iter()
-        .map(|s| s.surface)
-        .collect();
+    let samples = mls_shapes::surface_points(&mls_shapes::random_area_uniform(&torus, n, SEED));
     let clean: Vec<Point> = samples.iter().map(|s| s.point).collect();
     let h = cli_h(&clean);
     // σ = 5 % of the spacing.
