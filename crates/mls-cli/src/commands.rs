@@ -1,225 +1,74 @@
 //! The subcommands.
 
 use std::fmt::Write as _;
+use std::path::Path;
 
 use anyhow::{Context, Result};
+use mls_cli::evaluate::{self, vector_columns};
+use mls_cli::pipeline::{self, Built, Prepared, Timings};
+use mls_cli::{At, CurvatureOptions, Method};
 use mls_core::normals::{DEFAULT_NEIGHBOURS, NeighbourGraph, orientation_consistency};
-use mls_core::{
-    AdaptiveConfig, AdaptiveSurface, Curvature, JetConfig, JetPoint, Location, MlsConfig,
-    MlsSurface, NormalData, Parallelism, Point, PointStatus, Vector,
-};
-use mls_io::{Axis, Column};
+use mls_core::{AdaptiveConfig, MlsConfig, MlsSurface, Parallelism, Point, Vector};
+use mls_io::Column;
 
-use crate::pipeline::{self, Prepared, Surface, Timings};
-use crate::{
-    At, CurvatureArgs, EvalArgs, InfoArgs, Method, NormalsArgs, ProjectArgs, interactive,
-    status_code,
-};
+use crate::{CurvatureArgs, EvalArgs, InfoArgs, NormalsArgs, OutputArgs, ProjectArgs, interactive};
 
-const NAN3: [f64; 3] = [f64::NAN; 3];
-
-/// Vector columns `px py pz` for a prefix `p` (`"n"` gives `nx ny nz`).
-fn vector_columns<'a>(names: [&'a str; 3], v: &'a [[f64; 3]]) -> [Column<'a>; 3] {
-    [
-        Column::component(names[0], v, Axis::X),
-        Column::component(names[1], v, Axis::Y),
-        Column::component(names[2], v, Axis::Z),
-    ]
-}
-
-/// The columns of `mlscurv curvature` besides the position, filled result by result so that
-/// the full per-point results (about 600 bytes each) are held for one chunk at a time only.
-struct CurvatureColumns {
-    normal: Vec<[f64; 3]>,
-    k1: Vec<f64>,
-    k2: Vec<f64>,
-    mean: Vec<f64>,
-    gauss: Vec<f64>,
-    d1: Vec<[f64; 3]>,
-    d2: Vec<[f64; 3]>,
-    status: Vec<i32>,
-    /// Chosen scale and noise estimate, `--adaptive` only.
-    h: Vec<f64>,
-    noise: Vec<f64>,
-    /// Predicted errors of k1 and k2, `--method jet` only.
-    k1_sd: Vec<f64>,
-    k2_sd: Vec<f64>,
-}
-
-impl CurvatureColumns {
-    fn with_capacity(n: usize) -> Self {
-        Self {
-            normal: Vec::with_capacity(n),
-            k1: Vec::with_capacity(n),
-            k2: Vec::with_capacity(n),
-            mean: Vec::with_capacity(n),
-            gauss: Vec::with_capacity(n),
-            d1: Vec::with_capacity(n),
-            d2: Vec::with_capacity(n),
-            status: Vec::with_capacity(n),
-            h: Vec::new(),
-            noise: Vec::new(),
-            k1_sd: Vec::new(),
-            k2_sd: Vec::new(),
-        }
-    }
-
-    /// Appends the row of `r`, and replaces `point` (the query) by the point evaluated at, the
-    /// projection for `--at projected`; a failed point keeps its input position.
-    fn push(&mut self, r: Result<(Point, Curvature), PointStatus>, point: &mut Point) {
-        self.status.push(status_code(&r));
-        match r {
-            Ok((at, c)) => {
-                *point = at;
-                self.normal.push(c.normal.into());
-                self.k1.push(c.k1);
-                self.k2.push(c.k2);
-                self.mean.push(c.mean);
-                self.gauss.push(c.gauss);
-                self.d1.push(c.d1.into());
-                self.d2.push(c.d2.into());
-            }
-            Err(_) => {
-                for v in [&mut self.normal, &mut self.d1, &mut self.d2] {
-                    v.push(NAN3);
-                }
-                for v in [&mut self.k1, &mut self.k2, &mut self.mean, &mut self.gauss] {
-                    v.push(f64::NAN);
-                }
-            }
-        }
-    }
+/// The output of a command with [`OutputArgs`], checked before any work is done.
+fn output(inputs: &[&Path], out: &OutputArgs) -> Result<pipeline::Output> {
+    pipeline::check_output(
+        inputs,
+        &out.output,
+        out.formats.output_format,
+        out.force,
+        out.ascii,
+        None,
+    )
 }
 
 pub fn curvature(a: CurvatureArgs) -> Result<()> {
-    let output = pipeline::output(&[&a.input], &a.out)?;
+    let output = output(&[&a.input], &a.out)?;
     if a.adaptive && a.method == Method::Jet {
-        anyhow::bail!(
-            "--adaptive is the per-point scale of --method paper; the default jet method chooses \
-             its support per point by itself (use --method paper --adaptive for the MLS surface)"
-        );
+        anyhow::bail!("{}", mls_cli::ADAPTIVE_NEEDS_PAPER);
     }
     let s = &a.surface;
+    let options = CurvatureOptions {
+        surface: s.options(),
+        method: a.method,
+        at: a.at,
+        adaptive: a.adaptive,
+    };
     pipeline::with_threads(s.run.threads, || {
         let mut t = Timings::default();
-        let par = Parallelism::Rayon;
         let Prepared {
-            mut points,
-            scale,
-            normals_source,
-            normals_from_file,
-            surface,
+            points,
+            built:
+                Built {
+                    scale,
+                    normals_source,
+                    normals_from_file,
+                    surface,
+                },
         } = pipeline::prepare(
             &a.input,
             a.out.formats.input_format,
-            s,
+            s.columns.as_ref(),
+            &options.surface,
             &mut t,
-            |p, n, h, cutoff| {
-                Ok(if a.adaptive {
-                    let config = AdaptiveConfig {
-                        surface: MlsConfig {
-                            cutoff,
-                            ..MlsConfig::new(h)
-                        },
-                        ..AdaptiveConfig::new(h)
-                    };
-                    Surface::Adaptive(AdaptiveSurface::new(p, n, &config)?)
-                } else {
-                    Surface::Fixed(pipeline::fixed_surface(p, n, h, cutoff)?)
-                })
-            },
+            evaluate::curvature_surface(a.adaptive),
         )?;
-        let label = match a.at {
-            At::Input => "curvature",
-            At::Projected => "projection",
-        };
-        // Measured normals are data for the jet; estimated ones only give its frame (fitted
-        // as slopes they would count the positions twice and bring the covariance's bias).
-        let jet = JetConfig {
-            normals: if normals_from_file {
-                NormalData::Slopes
-            } else {
-                NormalData::Ignore
-            },
-            ..JetConfig::default()
-        };
+        let jet = evaluate::jet_config(normals_from_file);
         let n = points.len();
-        let mut out = CurvatureColumns::with_capacity(n);
-        t.time(label, || {
-            crate::progress::chunked(n, label, interactive(s.run.quiet), |range| {
-                let chunk = &mut points[range];
-                match &surface {
-                    Surface::Fixed(surface) if a.method == Method::Jet => {
-                        for (r, p) in surface.jet_at_points(chunk, &jet, par).iter().zip(chunk) {
-                            let at = |j: &JetPoint| match a.at {
-                                At::Input => *p,
-                                At::Projected => j.foot,
-                            };
-                            out.push(r.as_ref().map(|j| (at(j), j.curvature)).map_err(|e| *e), p);
-                            let sd = r.as_ref().map_or([f64::NAN; 2], |j| j.predicted_error());
-                            out.k1_sd.push(sd[0]);
-                            out.k2_sd.push(sd[1]);
-                        }
-                    }
-                    Surface::Fixed(surface) => {
-                        let results = match a.at {
-                            At::Input => surface.curvature_at_points(chunk, par),
-                            At::Projected => surface.project_points(chunk, par),
-                        };
-                        for (r, p) in results.iter().zip(chunk) {
-                            out.push(
-                                r.as_ref().map(|s| (s.point, s.curvature)).map_err(|e| *e),
-                                p,
-                            );
-                        }
-                    }
-                    Surface::Adaptive(surface) => {
-                        let at = match a.at {
-                            At::Input => Location::Input,
-                            At::Projected => Location::Projected,
-                        };
-                        for (r, p) in surface
-                            .curvature_at_points(chunk, at, par)
-                            .iter()
-                            .zip(chunk)
-                        {
-                            out.push(
-                                r.as_ref().map(|s| (s.point, s.curvature)).map_err(|e| *e),
-                                p,
-                            );
-                            let (h, noise) =
-                                r.as_ref().map_or((f64::NAN, f64::NAN), |s| (s.h, s.noise));
-                            out.h.push(h);
-                            out.noise.push(noise);
-                        }
-                    }
-                }
-            })
+        let mut out = t.time(evaluate::curvature_label(a.at), || {
+            evaluate::curvature(&points, &surface, &options, &jet, interactive(s.run.quiet))
         });
         // The surface's samples and tree are not needed for writing.
         drop(surface);
-        // Same layout: the positions column reuses the points' buffer.
-        let pos: Vec<[f64; 3]> = points.into_iter().map(|p| p.coords.into()).collect();
-        let mut columns = Vec::with_capacity(17);
-        columns.extend(vector_columns(["x", "y", "z"], &pos));
-        columns.extend(vector_columns(["nx", "ny", "nz"], &out.normal));
-        columns.extend([
-            Column::f64("k1", &out.k1),
-            Column::f64("k2", &out.k2),
-            Column::f64("mean", &out.mean),
-            Column::f64("gauss", &out.gauss),
-        ]);
-        columns.extend(vector_columns(["d1x", "d1y", "d1z"], &out.d1));
-        columns.extend(vector_columns(["d2x", "d2y", "d2z"], &out.d2));
-        if a.adaptive {
-            columns.push(Column::f64("h", &out.h));
-            columns.push(Column::f64("noise", &out.noise));
-        }
-        if a.method == Method::Jet {
-            columns.push(Column::f64("k1_sd", &out.k1_sd));
-            columns.push(Column::f64("k2_sd", &out.k2_sd));
-        }
-        columns.push(Column::i32("status", &out.status));
+        let pos: Vec<[f64; 3]> = match out.projected.take() {
+            Some(projected) => projected,
+            // Same layout: the positions column reuses the points' buffer.
+            None => points.into_iter().map(|p| p.coords.into()).collect(),
+        };
+        let columns = out.columns(&pos);
         t.time("write", || output.write(&columns, a.out.ascii))?;
         if !s.run.quiet {
             eprintln!("mlscurv curvature: {}", pipeline::input_name(&a.input));
@@ -360,11 +209,13 @@ fn eval_with(a: &EvalArgs, output: &pipeline::Output) -> Result<()> {
             a.h,
             mls_core::normals::DEFAULT_H_FACTOR,
             par,
-            &a.cloud,
+            &cloud_name,
         )
     })?;
     let h = scale.h;
-    pipeline::check_scale(&points, &scale, a.cutoff, &cloud_name)?;
+    for w in pipeline::check_scale(&points, &scale, a.cutoff, &cloud_name)? {
+        pipeline::print_warning(w);
+    }
     let normals: Vec<Vector> = file_normals.iter().map(|n| Vector::from(*n)).collect();
     let surface = t.time("index", || {
         MlsSurface::new(
@@ -386,7 +237,7 @@ fn eval_with(a: &EvalArgs, output: &pipeline::Output) -> Result<()> {
     let mut cols: Vec<Vec<f64>> = (0..20).map(|_| Vec::with_capacity(q.len())).collect();
     let mut status = Vec::with_capacity(q.len());
     for (r, p) in results.iter().zip(&q) {
-        status.push(status_code(r));
+        status.push(mls_cli::status_code(r));
         let row: [f64; 20] = match r {
             Ok(sp) => {
                 // Undo the underflow shift: these are the true g, ∇g and H (0 where they underflow).
@@ -456,7 +307,7 @@ fn eval_with(a: &EvalArgs, output: &pipeline::Output) -> Result<()> {
 }
 
 pub fn normals(a: NormalsArgs) -> Result<()> {
-    let output = pipeline::output(&[&a.input], &a.out)?;
+    let output = output(&[&a.input], &a.out)?;
     pipeline::with_threads(a.run.threads, || {
         let mut t = Timings::default();
         let par = Parallelism::Rayon;
@@ -464,37 +315,23 @@ pub fn normals(a: NormalsArgs) -> Result<()> {
             pipeline::read(&a.input, a.out.formats.input_format, a.columns.as_ref())
         })?;
         let points = pipeline::to_points(&cloud);
+        let name = pipeline::input_name(&a.input);
         let scale = t.time("spacing", || {
-            pipeline::choose_h(&points, a.scale.h, a.scale.h_factor, par, &a.input)
+            pipeline::choose_h(&points, a.scale.h, a.scale.h_factor, par, &name)
         })?;
         let est = t.time("normals", || {
             // Estimated whatever the file holds: its normals are not passed.
             pipeline::normals(
                 None,
                 &points,
-                crate::NormalsMode::Estimate,
+                mls_cli::NormalsMode::Estimate,
                 a.orient,
                 scale.h,
                 par,
-                &a.input,
+                &name,
             )
         })?;
-        let nrm: Vec<[f64; 3]> = est
-            .normals
-            .iter()
-            .map(|n| n.map_or([0.0; 3], Into::into))
-            .collect();
-        let status: Vec<i32> = est
-            .normals
-            .iter()
-            .map(|n| {
-                if n.is_some() {
-                    0
-                } else {
-                    i32::from(PointStatus::NormalEstimationFailed.code())
-                }
-            })
-            .collect();
+        let (nrm, status) = evaluate::normals_columns(&est.normals);
         let mut columns = Vec::new();
         columns.extend(vector_columns(["x", "y", "z"], &cloud.points));
         columns.extend(vector_columns(["nx", "ny", "nz"], &nrm));
@@ -521,70 +358,50 @@ pub fn normals(a: NormalsArgs) -> Result<()> {
 }
 
 pub fn project(a: ProjectArgs) -> Result<()> {
-    let output = pipeline::output(&[&a.input], &a.out)?;
+    let output = output(&[&a.input], &a.out)?;
     let s = &a.surface;
     pipeline::with_threads(s.run.threads, || {
         let mut t = Timings::default();
-        let par = Parallelism::Rayon;
         let Prepared {
-            mut points,
-            scale,
-            normals_source,
-            surface,
-            ..
+            points,
+            built:
+                Built {
+                    scale,
+                    normals_source,
+                    surface,
+                    ..
+                },
         } = pipeline::prepare(
             &a.input,
             a.out.formats.input_format,
-            s,
+            s.columns.as_ref(),
+            &s.options(),
             &mut t,
             pipeline::fixed_surface,
         )?;
         let n = points.len();
-        let mut nrm = Vec::with_capacity(n);
-        let mut status = Vec::with_capacity(n);
-        // How far each projected point moved, for the summary.
-        let mut moved = Vec::new();
-        t.time("projection", || {
-            crate::progress::chunked(n, "projection", interactive(s.run.quiet), |range| {
-                let chunk = &mut points[range];
-                let results = surface.project_points(chunk, par);
-                for (r, p) in results.iter().zip(chunk) {
-                    status.push(status_code(r));
-                    match r {
-                        Ok(sp) => {
-                            moved.push(dist(&sp.point.coords.into(), &p.coords.into()));
-                            *p = sp.point;
-                            nrm.push(sp.curvature.normal.into());
-                        }
-                        // A failed point keeps its input position.
-                        Err(_) => nrm.push(NAN3),
-                    }
-                }
-            })
+        let out = t.time("projection", || {
+            evaluate::projection(&points, &surface, interactive(s.run.quiet))
         });
         drop(surface);
-        let pos: Vec<[f64; 3]> = points.into_iter().map(|p| p.coords.into()).collect();
+        drop(points);
         let mut columns = Vec::new();
-        columns.extend(vector_columns(["x", "y", "z"], &pos));
-        columns.extend(vector_columns(["nx", "ny", "nz"], &nrm));
-        columns.push(Column::i32("status", &status));
+        columns.extend(vector_columns(["x", "y", "z"], &out.points));
+        columns.extend(vector_columns(["nx", "ny", "nz"], &out.normal));
+        columns.push(Column::i32("status", &out.status));
         t.time("write", || output.write(&columns, a.out.ascii))?;
         if !s.run.quiet {
             eprintln!("mlscurv project: {}", pipeline::input_name(&a.input));
             eprintln!("  points read     {n}");
             eprintln!("  h               {}", scale.describe(H_OPTIONS));
             eprintln!("  normals         {normals_source}");
-            eprintln!("  status          {}", pipeline::status_counts(&status));
-            eprintln!("  displacement    {}", pipeline::percentiles(&moved));
+            eprintln!("  status          {}", pipeline::status_counts(&out.status));
+            eprintln!("  displacement    {}", pipeline::percentiles(&out.moved));
             print_timings(&t, n);
             eprintln!("  wrote           {}", output.name());
         }
         Ok(())
     })
-}
-
-fn dist(a: &[f64; 3], b: &[f64; 3]) -> f64 {
-    ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
 }
 
 pub fn info(a: InfoArgs) -> Result<()> {
@@ -629,7 +446,7 @@ fn info_report(a: &InfoArgs, out: &mut String) -> Result<()> {
         None,
         mls_core::normals::DEFAULT_H_FACTOR,
         Parallelism::Rayon,
-        &a.input,
+        &pipeline::input_name(&a.input),
     ) {
         Ok(scale) => {
             if let Some(s) = scale.spacing {

@@ -5,12 +5,10 @@ use std::io::IsTerminal as _;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use clap::{ArgAction, Args, CommandFactory as _, FromArgMatches as _, Subcommand, ValueEnum};
-use mls_core::PointStatus;
+use clap::{ArgAction, Args, CommandFactory as _, FromArgMatches as _, Subcommand};
+use mls_cli::{At, Format, Method, NormalsMode, parse_cutoff, parse_orient, positive_finite};
 
 mod commands;
-mod pipeline;
-mod progress;
 
 #[derive(Debug, clap::Parser)]
 #[command(
@@ -52,38 +50,6 @@ enum Command {
     Project(ProjectArgs),
     /// Point count, bounding box, spacing, suggested h, normals.
     Info(InfoArgs),
-}
-
-/// Where normals come from.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-enum NormalsMode {
-    /// The file's normals if it has them, else estimate.
-    Auto,
-    /// The file's normals (an error if it has none).
-    File,
-    /// Estimate from the points, ignoring any normals in the file.
-    Estimate,
-}
-
-/// Where curvature is evaluated.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-enum At {
-    /// At the input points: the level set of g through each point.
-    Input,
-    /// At the input points projected onto the MLS surface.
-    Projected,
-}
-
-/// The curvature estimator.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-enum Method {
-    /// Weighted degree-4 polynomial jets in the frame of the MLS normal, with the support
-    /// chosen per point and a predicted error per point (columns k1_sd, k2_sd). Accurate on
-    /// irregular samples, scan boundaries and noise (docs/accuracy.md).
-    Jet,
-    /// The Amenta-Kil MLS surface in closed form (Yang & Qian 2007): exact for that surface,
-    /// accurate on regular grids, biased on irregular samples.
-    Paper,
 }
 
 /// How a command runs: threads and chatter.
@@ -130,6 +96,19 @@ struct SurfaceArgs {
     run: RunArgs,
 }
 
+impl SurfaceArgs {
+    /// The options that shape the surface, for the library's pipeline.
+    fn options(&self) -> mls_cli::SurfaceOptions {
+        mls_cli::SurfaceOptions {
+            h: self.scale.h,
+            h_factor: self.scale.h_factor,
+            cutoff: self.cutoff,
+            normals: self.normals,
+            orient: self.orient,
+        }
+    }
+}
+
 const COLUMNS_HELP: &str = "Names of the columns of a text input (.xyz/.txt/.pts, or .csv \
     instead of its header), e.g. `x,y,z,nx,ny,nz,intensity`: x, y, z and nx, ny, nz are read, \
     other names skipped. Without it, columns 4-6 of a headerless file are normals only if they \
@@ -163,33 +142,6 @@ struct FormatArgs {
     /// extension if the extension names a format.
     #[arg(long, value_enum)]
     output_format: Option<Format>,
-}
-
-/// A point-cloud file format.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-enum Format {
-    /// PLY (ASCII or binary).
-    Ply,
-    /// Whitespace-separated columns (.xyz, .txt, .pts).
-    Xyz,
-    /// Comma-separated columns with a header row.
-    Csv,
-    /// ASPRS LAS (points only on input; computed columns as extra bytes on output).
-    Las,
-    /// LASzip-compressed LAS.
-    Laz,
-}
-
-impl From<Format> for mls_io::FileFormat {
-    fn from(f: Format) -> Self {
-        match f {
-            Format::Ply => Self::Ply,
-            Format::Xyz => Self::Xyz,
-            Format::Csv => Self::Csv,
-            Format::Las => Self::Las,
-            Format::Laz => Self::Laz,
-        }
-    }
 }
 
 #[derive(Debug, Args)]
@@ -286,59 +238,6 @@ struct InfoArgs {
     input_format: Option<Format>,
 }
 
-fn positive_finite(s: &str) -> Result<f64, String> {
-    let v: f64 = s
-        .trim()
-        .parse()
-        .map_err(|_| format!("`{s}` is not a number"))?;
-    if v.is_finite() && v > 0.0 {
-        Ok(v)
-    } else {
-        Err(format!("must be finite and positive, got {s}"))
-    }
-}
-
-fn parse_cutoff(s: &str) -> Result<mls_core::Cutoff, String> {
-    if s.eq_ignore_ascii_case("none") {
-        return Ok(mls_core::Cutoff::None);
-    }
-    let c = positive_finite(s)?;
-    if c < mls_core::Cutoff::MIN_FACTOR {
-        return Err(format!(
-            "must be at least {} (in units of h) or `none`, got {s}",
-            mls_core::Cutoff::MIN_FACTOR
-        ));
-    }
-    Ok(mls_core::Cutoff::Radius(c))
-}
-
-fn parse_orient(s: &str) -> Result<mls_core::normals::Orientation, String> {
-    use mls_core::normals::Orientation;
-    match s {
-        "mst" => Ok(Orientation::Outward),
-        "none" => Ok(Orientation::None),
-        "up" => Ok(Orientation::Up),
-        _ => {
-            let Some(rest) = s.strip_prefix("viewpoint:") else {
-                return Err(format!(
-                    "expected `mst`, `up`, `none` or `viewpoint:X,Y,Z`, got `{s}`"
-                ));
-            };
-            let v: Vec<f64> = rest
-                .split(',')
-                .map(|c| c.trim().parse::<f64>().ok().filter(|v| v.is_finite()))
-                .collect::<Option<_>>()
-                .ok_or_else(|| {
-                    format!("viewpoint needs three finite numbers X,Y,Z, got `{rest}`")
-                })?;
-            let [x, y, z] = v[..] else {
-                return Err(format!("viewpoint needs three numbers X,Y,Z, got `{rest}`"));
-            };
-            Ok(Orientation::Viewpoint(mls_core::Point::new(x, y, z)))
-        }
-    }
-}
-
 /// Whether progress bars may be drawn.
 fn interactive(quiet: bool) -> bool {
     !quiet && std::io::stderr().is_terminal()
@@ -423,13 +322,5 @@ fn main() -> ExitCode {
             eprintln!("mlscurv: error: {e:#}");
             ExitCode::FAILURE
         }
-    }
-}
-
-/// The numeric status written to files.
-fn status_code(r: &Result<impl Sized, PointStatus>) -> i32 {
-    match r {
-        Ok(_) => 0,
-        Err(s) => i32::from(s.code()),
     }
 }

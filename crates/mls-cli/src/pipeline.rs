@@ -15,7 +15,7 @@ use mls_core::{
 };
 use mls_io::{Column, FileFormat, PlyFormat, PointCloud, ReadError};
 
-use crate::{Format, NormalsMode, OutputArgs, SurfaceArgs};
+use crate::{Format, NormalsMode, SurfaceOptions};
 
 /// The smallest cloud a neighbourhood can be built from: a covariance normal needs 3 points
 /// besides the centre, the MLS evaluation at least 3 samples.
@@ -57,7 +57,7 @@ pub fn input_name(path: &Path) -> String {
 }
 
 /// The name of a format on the command line.
-fn format_name(format: FileFormat) -> &'static str {
+pub fn format_name(format: FileFormat) -> &'static str {
     match format {
         FileFormat::Ply => "ply",
         FileFormat::Xyz => "xyz",
@@ -152,14 +152,16 @@ pub fn read(
     columns: Option<&mls_io::ColumnNames>,
 ) -> Result<PointCloud> {
     let cloud = read_any(path, format, columns)?;
-    if cloud.points.len() < MIN_POINTS {
-        bail!(
-            "{}: {} point(s); at least {MIN_POINTS} are needed to build a neighbourhood",
-            input_name(path),
-            cloud.points.len()
-        );
-    }
+    check_count(cloud.points.len(), &input_name(path))?;
     Ok(cloud)
+}
+
+/// Refuses a cloud of fewer than [`MIN_POINTS`] points; `file` names it.
+pub fn check_count(n: usize, file: &str) -> Result<()> {
+    if n < MIN_POINTS {
+        bail!("{file}: {n} point(s); at least {MIN_POINTS} are needed to build a neighbourhood");
+    }
+    Ok(())
 }
 
 /// Where a command's table goes.
@@ -233,18 +235,6 @@ pub fn write_stdout(bytes: &[u8]) -> Result<()> {
         Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => quit_on_broken_pipe(),
         other => other.map_err(|e| anyhow!("{STDOUT_NAME}: {e}")),
     }
-}
-
-/// The output of a command with [`OutputArgs`], checked before any work is done.
-pub fn output(inputs: &[&Path], out: &OutputArgs) -> Result<Output> {
-    check_output(
-        inputs,
-        &out.output,
-        out.formats.output_format,
-        out.force,
-        out.ascii,
-        None,
-    )
 }
 
 /// Checks the output before any work is done, so that a long run does not end in an error
@@ -329,6 +319,7 @@ pub fn to_points(cloud: &PointCloud) -> Vec<Point> {
 }
 
 /// The chosen h and a sentence on why.
+#[derive(Debug)]
 pub struct Scale {
     pub h: f64,
     /// How h was derived, without parentheses: `2 × median local spacing … over 12 neighbours`,
@@ -366,14 +357,20 @@ const SUPPORT_SAMPLE: usize = 1 << 16;
 /// hundred within the default cutoff (about 35 times fewer).
 const SLOW_SUPPORT: f64 = 10_000.0;
 
-/// Refuses an h far beyond the size of the cloud and warns (on stderr, even with --quiet: the
-/// results would look fine) when the kernel's weight spans most of the cloud, or when its
-/// support holds so many samples that the run will be slow. At h = 1000 on the 0.25 m bunny
-/// every point came out "ok", with k ≈ 1e-6, after a run 300 times longer than usual.
-pub fn check_scale(points: &[Point], scale: &Scale, cutoff: Cutoff, file: &str) -> Result<()> {
+/// Refuses an h far beyond the size of the cloud and returns warnings, each starting with
+/// `file`, when the kernel's weight spans most of the cloud, or when its support holds so many
+/// samples that the run will be slow. The binary prints them on stderr even with --quiet (the
+/// results would look fine; see [`print_warning`]). At h = 1000 on the 0.25 m bunny every point
+/// came out "ok", with k ≈ 1e-6, after a run 300 times longer than usual.
+pub fn check_scale(
+    points: &[Point],
+    scale: &Scale,
+    cutoff: Cutoff,
+    file: &str,
+) -> Result<Vec<String>> {
     let h = scale.h;
     let Some(first) = points.first() else {
-        return Ok(());
+        return Ok(Vec::new());
     };
     let (lo, hi) = points
         .iter()
@@ -382,7 +379,7 @@ pub fn check_scale(points: &[Point], scale: &Scale, cutoff: Cutoff, file: &str) 
         });
     let diagonal = (hi - lo).norm();
     if !(diagonal > 0.0) {
-        return Ok(());
+        return Ok(Vec::new());
     }
     if h > MAX_H_OVER_DIAGONAL * diagonal {
         bail!(
@@ -453,10 +450,15 @@ pub fn check_scale(points: &[Point], scale: &Scale, cutoff: Cutoff, file: &str) 
             }
         ));
     }
-    for w in &warnings {
-        eprintln!("mlscurv: warning: {file}: {w}");
-    }
-    Ok(())
+    Ok(warnings
+        .into_iter()
+        .map(|w| format!("{file}: {w}"))
+        .collect())
+}
+
+/// Prints a warning of [`check_scale`] on stderr, as the binary does even with `--quiet`.
+pub fn print_warning(warning: String) {
+    eprintln!("mlscurv: warning: {warning}");
 }
 
 pub fn choose_h(
@@ -464,7 +466,7 @@ pub fn choose_h(
     h: Option<f64>,
     factor: f64,
     par: Parallelism,
-    file: &Path,
+    file: &str,
 ) -> Result<Scale> {
     if let Some(h) = h {
         return Ok(Scale {
@@ -475,9 +477,9 @@ pub fn choose_h(
         });
     }
     let stats = spacing_statistics(points, DEFAULT_SPACING_NEIGHBOURS, par)
-        .with_context(|| format!("{}: cannot measure the point spacing", input_name(file)))?;
+        .with_context(|| format!("{file}: cannot measure the point spacing"))?;
     let h = suggest_h(&stats, factor)
-        .with_context(|| format!("{}: cannot derive h from the spacing", input_name(file)))?;
+        .with_context(|| format!("{file}: cannot derive h from the spacing"))?;
     Ok(Scale {
         h,
         why: format!(
@@ -490,6 +492,7 @@ pub fn choose_h(
 }
 
 /// Oriented normals, one per point (`None` where none could be had), and their source.
+#[derive(Debug)]
 pub struct Normals {
     pub normals: Vec<Option<Vector>>,
     pub source: String,
@@ -506,14 +509,11 @@ pub fn normals(
     orientation: Orientation,
     h: f64,
     par: Parallelism,
-    file: &Path,
+    file: &str,
 ) -> Result<Normals> {
     let from_file = match (mode, file_normals) {
         (NormalsMode::File, None) => {
-            bail!(
-                "{}: --normals file given but the file has no normals (nx, ny, nz)",
-                input_name(file)
-            )
+            bail!("{file}: --normals file given but the file has no normals (nx, ny, nz)")
         }
         (NormalsMode::File | NormalsMode::Auto, Some(n)) => Some(n),
         _ => None,
@@ -546,7 +546,7 @@ pub fn normals(
         ..NormalsConfig::default()
     };
     let est = estimate_normals(points, &config, par)
-        .with_context(|| format!("{}: normal estimation", input_name(file)))?;
+        .with_context(|| format!("{file}: normal estimation"))?;
     let orient = match orientation {
         Orientation::Outward => "oriented outward by minimum spanning tree".to_string(),
         Orientation::Viewpoint(v) => format!(
@@ -601,12 +601,11 @@ pub fn normals(
     })
 }
 
-/// Everything a command needs before evaluating: the points, h, where the normals came from,
-/// and the surface. The file's normals and the oriented normals are not kept: the surface holds
-/// its own copy, and a cloud's worth of memory counts at a million points.
-pub struct Prepared<S = MlsSurface> {
-    /// The input points, in file order.
-    pub points: Vec<Point>,
+/// Everything a command needs before evaluating, besides the points: h, where the normals
+/// came from, and the surface. The file's normals and the oriented normals are not kept: the
+/// surface holds its own copy, and a cloud's worth of memory counts at a million points.
+#[derive(Debug)]
+pub struct Built<S = MlsSurface> {
     pub scale: Scale,
     /// Where the normals came from, for the summary.
     pub normals_source: String,
@@ -615,7 +614,15 @@ pub struct Prepared<S = MlsSurface> {
     pub surface: S,
 }
 
+/// [`Built`] and the input points it was built from, in file order.
+#[derive(Debug)]
+pub struct Prepared<S = MlsSurface> {
+    pub points: Vec<Point>,
+    pub built: Built<S>,
+}
+
 /// The surface `mlscurv curvature` evaluates: one scale, or a per-point scale (`--adaptive`).
+#[derive(Debug)]
 pub enum Surface {
     Fixed(MlsSurface),
     Adaptive(AdaptiveSurface),
@@ -638,26 +645,53 @@ pub fn fixed_surface(
     )
 }
 
-/// Reads the input, chooses h, gets oriented normals and builds the surface with `build`
-/// (points, normals, h, cutoff), timing each stage.
+/// Reads the input, then builds the surface as [`build_surface`] does, timing each stage and
+/// printing the warnings on stderr.
 pub fn prepare<S>(
     input: &Path,
     format: Option<Format>,
-    s: &SurfaceArgs,
+    columns: Option<&mls_io::ColumnNames>,
+    s: &SurfaceOptions,
     t: &mut Timings,
     build: impl FnOnce(&[Point], &[Vector], f64, Cutoff) -> Result<S, ConfigError>,
 ) -> Result<Prepared<S>> {
-    let par = Parallelism::Rayon;
     let PointCloud {
         points,
         normals: file_normals,
-    } = t.time("read", || read(input, format, s.columns.as_ref()))?;
+    } = t.time("read", || read(input, format, columns))?;
     // `[f64; 3]` and `Point` have the same layout: the conversion reuses the buffer.
     let points: Vec<Point> = points.into_iter().map(Point::from).collect();
-    let scale = t.time("spacing", || {
-        choose_h(&points, s.scale.h, s.scale.h_factor, par, input)
-    })?;
-    check_scale(&points, &scale, s.cutoff, &input_name(input))?;
+    let built = build_surface(
+        &points,
+        file_normals,
+        &input_name(input),
+        s,
+        t,
+        print_warning,
+        build,
+    )?;
+    Ok(Prepared { points, built })
+}
+
+/// Chooses h, checks it against the cloud (passing its warnings to `warn` at once), gets
+/// oriented normals (`file_normals`, or estimated, as `s.normals` says) and builds the surface
+/// with `build` (points, normals, h, cutoff), timing each stage. `file` names the cloud in
+/// messages; `points` must be finite (the readers refuse other values) and at least
+/// [`MIN_POINTS`] ([`check_count`]).
+pub fn build_surface<S>(
+    points: &[Point],
+    file_normals: Option<Vec<[f64; 3]>>,
+    file: &str,
+    s: &SurfaceOptions,
+    t: &mut Timings,
+    mut warn: impl FnMut(String),
+    build: impl FnOnce(&[Point], &[Vector], f64, Cutoff) -> Result<S, ConfigError>,
+) -> Result<Built<S>> {
+    let par = Parallelism::Rayon;
+    let scale = t.time("spacing", || choose_h(points, s.h, s.h_factor, par, file))?;
+    for w in check_scale(points, &scale, s.cutoff, file)? {
+        warn(w);
+    }
     let Normals {
         normals,
         source,
@@ -665,19 +699,18 @@ pub fn prepare<S>(
     } = t.time("normals", || {
         normals(
             file_normals,
-            &points,
+            points,
             s.normals,
             s.orient,
             scale.h,
             par,
-            input,
+            file,
         )
     })?;
     let surface = t.time("index", || {
-        surface(&points, normals, scale.h, s.cutoff, input, build)
+        surface(points, normals, scale.h, s.cutoff, file, build)
     })?;
-    Ok(Prepared {
-        points,
+    Ok(Built {
         scale,
         normals_source: source,
         normals_from_file: from_file,
@@ -691,7 +724,7 @@ pub fn surface<S>(
     normals: Vec<Option<Vector>>,
     h: f64,
     cutoff: Cutoff,
-    file: &Path,
+    file: &str,
     build: impl FnOnce(&[Point], &[Vector], f64, Cutoff) -> Result<S, ConfigError>,
 ) -> Result<S> {
     // Usually every point has a normal: the points are then passed as they are, not copied.
@@ -707,12 +740,11 @@ pub fn surface<S>(
     let p = kept.as_deref().unwrap_or(points);
     if p.len() < MIN_POINTS {
         bail!(
-            "{}: only {} point(s) have a normal; at least {MIN_POINTS} are needed",
-            input_name(file),
+            "{file}: only {} point(s) have a normal; at least {MIN_POINTS} are needed",
             p.len()
         );
     }
-    build(p, &n, h, cutoff).with_context(|| input_name(file))
+    build(p, &n, h, cutoff).with_context(|| file.to_owned())
 }
 
 /// Runs `f` on a rayon pool with the requested number of threads (all cores by default).

@@ -1,0 +1,311 @@
+//! Evaluation of a built surface at every point, chunk by chunk, into the output columns of
+//! `mlscurv curvature`, `project` and `normals`.
+
+use mls_core::{
+    AdaptiveSurface, Curvature, JetConfig, JetPoint, Location, MlsSurface, NormalData, Parallelism,
+    Point, PointStatus, Vector,
+};
+use mls_io::{Axis, Column};
+
+use crate::pipeline::Surface;
+use crate::{At, CurvatureOptions, Method, status_code};
+
+const NAN3: [f64; 3] = [f64::NAN; 3];
+
+/// Vector columns `px py pz` for a prefix `p` (`"n"` gives `nx ny nz`).
+pub fn vector_columns<'a>(names: [&'a str; 3], v: &'a [[f64; 3]]) -> [Column<'a>; 3] {
+    [
+        Column::component(names[0], v, Axis::X),
+        Column::component(names[1], v, Axis::Y),
+        Column::component(names[2], v, Axis::Z),
+    ]
+}
+
+/// The jet's configuration for a run: measured normals are data for the jet; estimated ones
+/// only give its frame (fitted as slopes they would count the positions twice and bring the
+/// covariance's bias).
+pub fn jet_config(normals_from_file: bool) -> JetConfig {
+    JetConfig {
+        normals: if normals_from_file {
+            NormalData::Slopes
+        } else {
+            NormalData::Ignore
+        },
+        ..JetConfig::default()
+    }
+}
+
+/// The name of the evaluation stage, for timings and the progress bar.
+pub fn curvature_label(at: At) -> &'static str {
+    match at {
+        At::Input => "curvature",
+        At::Projected => "projection",
+    }
+}
+
+/// The columns of `mlscurv curvature` besides the position, filled result by result so that
+/// the full per-point results (about 600 bytes each) are held for one chunk at a time only.
+#[derive(Debug)]
+pub struct CurvatureColumns {
+    pub normal: Vec<[f64; 3]>,
+    pub k1: Vec<f64>,
+    pub k2: Vec<f64>,
+    pub mean: Vec<f64>,
+    pub gauss: Vec<f64>,
+    pub d1: Vec<[f64; 3]>,
+    pub d2: Vec<[f64; 3]>,
+    pub status: Vec<i32>,
+    /// Chosen scale and noise estimate, `--adaptive` only.
+    pub h: Vec<f64>,
+    pub noise: Vec<f64>,
+    /// Predicted errors of k1 and k2, `--method jet` only.
+    pub k1_sd: Vec<f64>,
+    pub k2_sd: Vec<f64>,
+    /// With `--at projected`, the points evaluated at: the projections, and the input
+    /// position where a point failed. `None` with `--at input`, where they are the input
+    /// points (every estimator then reports the query itself).
+    pub projected: Option<Vec<[f64; 3]>>,
+    /// Whether the `h` and `noise` columns are part of the table.
+    pub adaptive: bool,
+    /// Whether the `k1_sd` and `k2_sd` columns are part of the table.
+    pub jet: bool,
+}
+
+impl CurvatureColumns {
+    fn with_capacity(n: usize, options: &CurvatureOptions) -> Self {
+        Self {
+            normal: Vec::with_capacity(n),
+            k1: Vec::with_capacity(n),
+            k2: Vec::with_capacity(n),
+            mean: Vec::with_capacity(n),
+            gauss: Vec::with_capacity(n),
+            d1: Vec::with_capacity(n),
+            d2: Vec::with_capacity(n),
+            status: Vec::with_capacity(n),
+            h: Vec::new(),
+            noise: Vec::new(),
+            k1_sd: Vec::new(),
+            k2_sd: Vec::new(),
+            projected: (options.at == At::Projected).then(|| Vec::with_capacity(n)),
+            adaptive: options.adaptive,
+            jet: options.method == Method::Jet,
+        }
+    }
+
+    /// Appends the row of `r`, and the point evaluated at (the projection for `--at
+    /// projected`; a failed point keeps its input position `query`).
+    fn push(&mut self, r: Result<(Point, Curvature), PointStatus>, query: &Point) {
+        self.status.push(status_code(&r));
+        let at = match r {
+            Ok((at, c)) => {
+                self.normal.push(c.normal.into());
+                self.k1.push(c.k1);
+                self.k2.push(c.k2);
+                self.mean.push(c.mean);
+                self.gauss.push(c.gauss);
+                self.d1.push(c.d1.into());
+                self.d2.push(c.d2.into());
+                at
+            }
+            Err(_) => {
+                for v in [&mut self.normal, &mut self.d1, &mut self.d2] {
+                    v.push(NAN3);
+                }
+                for v in [&mut self.k1, &mut self.k2, &mut self.mean, &mut self.gauss] {
+                    v.push(f64::NAN);
+                }
+                *query
+            }
+        };
+        if let Some(projected) = &mut self.projected {
+            projected.push(at.coords.into());
+        }
+    }
+
+    /// The table as written, in the order of `mlscurv curvature`'s output: `x y z nx ny nz k1
+    /// k2 mean gauss d1x d1y d1z d2x d2y d2z`, then `h noise` (adaptive), `k1_sd k2_sd` (jet)
+    /// and `status`. `positions` are the `x y z` columns: [`Self::projected`] if any, else the
+    /// input points.
+    pub fn columns<'a>(&'a self, positions: &'a [[f64; 3]]) -> Vec<Column<'a>> {
+        let mut columns = Vec::with_capacity(21);
+        columns.extend(vector_columns(["x", "y", "z"], positions));
+        columns.extend(vector_columns(["nx", "ny", "nz"], &self.normal));
+        columns.extend([
+            Column::f64("k1", &self.k1),
+            Column::f64("k2", &self.k2),
+            Column::f64("mean", &self.mean),
+            Column::f64("gauss", &self.gauss),
+        ]);
+        columns.extend(vector_columns(["d1x", "d1y", "d1z"], &self.d1));
+        columns.extend(vector_columns(["d2x", "d2y", "d2z"], &self.d2));
+        if self.adaptive {
+            columns.push(Column::f64("h", &self.h));
+            columns.push(Column::f64("noise", &self.noise));
+        }
+        if self.jet {
+            columns.push(Column::f64("k1_sd", &self.k1_sd));
+            columns.push(Column::f64("k2_sd", &self.k2_sd));
+        }
+        columns.push(Column::i32("status", &self.status));
+        columns
+    }
+}
+
+/// Evaluates `surface` at every one of `points` in chunks of [`crate::progress::chunked`]
+/// (the chunk size changes results at the rounding level, so the binary and the Python
+/// package both go through here), drawing a progress bar on stderr if `show`.
+///
+/// `jet` is used with [`Method::Jet`] ([`jet_config`]); `--adaptive` requires `surface` to be
+/// [`Surface::Adaptive`].
+pub fn curvature(
+    points: &[Point],
+    surface: &Surface,
+    options: &CurvatureOptions,
+    jet: &JetConfig,
+    show: bool,
+) -> CurvatureColumns {
+    let par = Parallelism::Rayon;
+    let n = points.len();
+    let mut out = CurvatureColumns::with_capacity(n, options);
+    let label = curvature_label(options.at);
+    crate::progress::chunked(n, label, show, |range| {
+        let chunk = &points[range];
+        match surface {
+            Surface::Fixed(surface) if options.method == Method::Jet => {
+                for (r, p) in surface.jet_at_points(chunk, jet, par).iter().zip(chunk) {
+                    let at = |j: &JetPoint| match options.at {
+                        At::Input => *p,
+                        At::Projected => j.foot,
+                    };
+                    out.push(r.as_ref().map(|j| (at(j), j.curvature)).map_err(|e| *e), p);
+                    let sd = r.as_ref().map_or([f64::NAN; 2], |j| j.predicted_error());
+                    out.k1_sd.push(sd[0]);
+                    out.k2_sd.push(sd[1]);
+                }
+            }
+            Surface::Fixed(surface) => {
+                let results = match options.at {
+                    At::Input => surface.curvature_at_points(chunk, par),
+                    At::Projected => surface.project_points(chunk, par),
+                };
+                for (r, p) in results.iter().zip(chunk) {
+                    out.push(
+                        r.as_ref().map(|s| (s.point, s.curvature)).map_err(|e| *e),
+                        p,
+                    );
+                }
+            }
+            Surface::Adaptive(surface) => {
+                let at = match options.at {
+                    At::Input => Location::Input,
+                    At::Projected => Location::Projected,
+                };
+                for (r, p) in surface
+                    .curvature_at_points(chunk, at, par)
+                    .iter()
+                    .zip(chunk)
+                {
+                    out.push(
+                        r.as_ref().map(|s| (s.point, s.curvature)).map_err(|e| *e),
+                        p,
+                    );
+                    let (h, noise) = r.as_ref().map_or((f64::NAN, f64::NAN), |s| (s.h, s.noise));
+                    out.h.push(h);
+                    out.noise.push(noise);
+                }
+            }
+        }
+    });
+    out
+}
+
+/// Builds the surface `mlscurv curvature` evaluates, for [`crate::pipeline::prepare`]'s
+/// `build`: one scale, or a scale per point with `adaptive`.
+pub fn curvature_surface(
+    adaptive: bool,
+) -> impl FnOnce(&[Point], &[Vector], f64, mls_core::Cutoff) -> Result<Surface, mls_core::ConfigError>
+{
+    move |p, n, h, cutoff| {
+        Ok(if adaptive {
+            let config = mls_core::AdaptiveConfig {
+                surface: mls_core::MlsConfig {
+                    cutoff,
+                    ..mls_core::MlsConfig::new(h)
+                },
+                ..mls_core::AdaptiveConfig::new(h)
+            };
+            Surface::Adaptive(AdaptiveSurface::new(p, n, &config)?)
+        } else {
+            Surface::Fixed(crate::pipeline::fixed_surface(p, n, h, cutoff)?)
+        })
+    }
+}
+
+/// The columns of `mlscurv project` besides the position.
+#[derive(Debug, Default)]
+pub struct Projection {
+    /// The projected points; a failed point keeps its input position.
+    pub points: Vec<[f64; 3]>,
+    /// The surface normal at the projection (NaN where the point failed).
+    pub normal: Vec<[f64; 3]>,
+    pub status: Vec<i32>,
+    /// How far each projected point moved (failed points left out), for the summary.
+    pub moved: Vec<f64>,
+}
+
+/// Projects every one of `points` onto `surface` in chunks, as `mlscurv project` does.
+pub fn projection(points: &[Point], surface: &MlsSurface, show: bool) -> Projection {
+    let par = Parallelism::Rayon;
+    let n = points.len();
+    let mut out = Projection {
+        points: Vec::with_capacity(n),
+        normal: Vec::with_capacity(n),
+        status: Vec::with_capacity(n),
+        moved: Vec::new(),
+    };
+    crate::progress::chunked(n, "projection", show, |range| {
+        let chunk = &points[range];
+        let results = surface.project_points(chunk, par);
+        for (r, p) in results.iter().zip(chunk) {
+            out.status.push(status_code(r));
+            match r {
+                Ok(sp) => {
+                    out.moved
+                        .push(dist(&sp.point.coords.into(), &p.coords.into()));
+                    out.points.push(sp.point.coords.into());
+                    out.normal.push(sp.curvature.normal.into());
+                }
+                // A failed point keeps its input position.
+                Err(_) => {
+                    out.points.push(p.coords.into());
+                    out.normal.push(NAN3);
+                }
+            }
+        }
+    });
+    out
+}
+
+fn dist(a: &[f64; 3], b: &[f64; 3]) -> f64 {
+    ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
+}
+
+/// The columns of `mlscurv normals` besides the position: each normal, `0 0 0` where it could
+/// not be estimated, and its status (0, or [`PointStatus::NormalEstimationFailed`]).
+pub fn normals_columns(normals: &[Option<Vector>]) -> (Vec<[f64; 3]>, Vec<i32>) {
+    let nrm = normals
+        .iter()
+        .map(|n| n.map_or([0.0; 3], Into::into))
+        .collect();
+    let status = normals
+        .iter()
+        .map(|n| {
+            if n.is_some() {
+                0
+            } else {
+                i32::from(PointStatus::NormalEstimationFailed.code())
+            }
+        })
+        .collect();
+    (nrm, status)
+}
