@@ -1033,6 +1033,21 @@ fn vector_names(key: &str) -> [String; 3] {
     }
 }
 
+/// The values of a one-dimensional array, converted by numpy to `dtype` (the name of `T`)
+/// rather than element by element.
+fn values<T: numpy::Element>(array: &Bound<'_, PyAny>, dtype: &str) -> PyResult<Vec<T>> {
+    let py = array.py();
+    let kwargs = PyDict::new(py);
+    kwargs.set_item("dtype", dtype)?;
+    let contiguous =
+        py.import("numpy")?
+            .call_method("ascontiguousarray", (array,), Some(&kwargs))?;
+    contiguous
+        .cast_into::<PyArray1<T>>()?
+        .to_vec()
+        .map_err(to_value_error)
+}
+
 /// Appends the columns of `value` (one-dimensional, or (N, 3) with [`vector_names`]) under
 /// `key`: integers as int32, real numbers as float64.
 fn owned_columns(key: &str, value: &Bound<'_, PyAny>, out: &mut Vec<Owned>) -> PyResult<()> {
@@ -1055,7 +1070,7 @@ fn owned_columns(key: &str, value: &Bound<'_, PyAny>, out: &mut Vec<Owned>) -> P
         [_] => {
             let name = key.to_owned();
             out.push(if integer {
-                let v: Vec<i64> = array.call_method1("astype", ("int64",))?.extract()?;
+                let v: Vec<i64> = values(&array, "int64")?;
                 let v = v
                     .into_iter()
                     .enumerate()
@@ -1070,14 +1085,13 @@ fn owned_columns(key: &str, value: &Bound<'_, PyAny>, out: &mut Vec<Owned>) -> P
                     .collect::<PyResult<Vec<i32>>>()?;
                 Owned::I32(name, v)
             } else {
-                Owned::F64(name, array.call_method1("astype", ("float64",))?.extract()?)
+                Owned::F64(name, values(&array, "float64")?)
             });
         }
         [_, 3] => {
-            let array = array.call_method1("astype", ("float64",))?;
             for (i, name) in vector_names(key).into_iter().enumerate() {
                 let component = array.get_item((PySlice::full(py), i))?;
-                out.push(Owned::F64(name, component.extract()?));
+                out.push(Owned::F64(name, values(&component, "float64")?));
             }
         }
         _ => {
