@@ -139,60 +139,6 @@ pub struct JetPoint {
     pub fit: JetFit,
 }
 
-/// Normal equations of one kind of data (heights, or slopes from normals).
-#[derive(Clone, Copy)]
-struct Equations {
-    /// `Σ ω φ φᵀ`.
-    m: SMatrix<f64, 15, 15>,
-    /// `Σ ω² φ φᵀ`, for the variance of the coefficients.
-    m2: SMatrix<f64, 15, 15>,
-    /// `Σ ω φ y`.
-    rhs: SVector<f64, 15>,
-    /// `Σ ω` over the equations.
-    weight: f64,
-}
-
-impl Equations {
-    fn new() -> Self {
-        Self {
-            m: SMatrix::zeros(),
-            m2: SMatrix::zeros(),
-            rhs: SVector::zeros(),
-            weight: 0.0,
-        }
-    }
-
-    /// Adds the row `φ · c = y` with weight `w`, to the upper triangles only: column `a`'s
-    /// rows `0..=a` are contiguous in the column-major storage, so the loop vectorises.
-    fn add(&mut self, phi: &[f64; 15], y: f64, w: f64, terms: usize) {
-        let (m, m2) = (self.m.as_mut_slice(), self.m2.as_mut_slice());
-        for a in 0..terms {
-            let wa = w * phi[a];
-            let wwa = wa * w;
-            self.rhs[a] += wa * y;
-            let column = a * 15..a * 15 + a + 1;
-            for ((c, c2), &pb) in m[column.clone()]
-                .iter_mut()
-                .zip(&mut m2[column])
-                .zip(&phi[..=a])
-            {
-                *c += wa * pb;
-                *c2 += wwa * pb;
-            }
-        }
-        self.weight += w;
-    }
-
-    fn symmetrise(&mut self, terms: usize) {
-        for a in 0..terms {
-            for b in 0..a {
-                self.m[(a, b)] = self.m[(b, a)];
-                self.m2[(a, b)] = self.m2[(b, a)];
-            }
-        }
-    }
-}
-
 /// Whether, and how, the samples' normals enter the fit.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum NormalData {
@@ -307,32 +253,12 @@ pub fn fit(
     normals: NormalData,
     scratch: &mut JetScratch,
 ) -> Option<JetFit> {
-    let inv_r2 = 1.0 / (radius * radius);
     let max_degree = degree.clamp(2, 4);
-    let terms = coefficient_count(max_degree);
-    let mut heights = Equations::new();
-    let mut slopes = Equations::new();
-    let mut count = 0;
-    let mut slope_rows = 0;
-    let rows = &mut scratch.rows;
-    rows.clear();
-    for_each_row(samples, centre, frame, inv_r2, radius, normals, |row| {
-        rows.push(row)
-    });
-    for row in rows.iter() {
-        match *row {
-            Row::Height { phi, z, w } => {
-                heights.add(&phi, z, w, terms);
-                count += 1;
-            }
-            Row::Slope { phi, slope, w } => {
-                slopes.add(&phi, slope, w, terms);
-                slope_rows += 1;
-            }
-        };
-    }
-    heights.symmetrise(terms);
-    slopes.symmetrise(terms);
+    let locals = &mut scratch.locals;
+    local_samples(samples, centre, frame, radius, normals, locals);
+    let moments = Moments::of(locals);
+    let count = moments.heights;
+    let slope_rows = 2 * moments.slope_samples;
     // A degree needs 1.5 equations (heights and slopes) per coefficient: a count, so that the
     // choice never hangs on rounding; the pivot test in `solve` only catches degenerate layouts such as a line.
     let mut deg = max_degree;
@@ -347,9 +273,9 @@ pub fn fit(
     }
     loop {
         let fitted = match deg {
-            4 => solve::<15>(rows, normals, &heights, &slopes),
-            3 => solve::<10>(rows, normals, &heights, &slopes),
-            _ => solve::<6>(rows, normals, &heights, &slopes),
+            4 => solve::<15>(locals, normals, &moments),
+            3 => solve::<10>(locals, normals, &moments),
+            _ => solve::<6>(locals, normals, &moments),
         };
         if let Some(solution) = fitted {
             let mut coefficients = [0.0; 15];
@@ -374,32 +300,37 @@ pub fn fit(
     }
 }
 
-/// Reusable storage for [`fit`]: the equations of one fit, kept for the residual passes.
+/// Reusable storage for [`fit`]: the support in local coordinates, kept for the residual
+/// passes.
 #[derive(Debug, Default)]
 pub struct JetScratch {
-    rows: Vec<Row>,
+    locals: Vec<Local>,
 }
 
-/// One equation of the fit, in scaled coordinates.
+/// One sample of the support in scaled local coordinates `(u, v, z) = (q − x)·(t1, t2, n)/ρ`.
 #[derive(Clone, Copy, Debug)]
-enum Row {
-    /// `P(u, v) = z` with weight `w`.
-    Height { phi: [f64; 15], z: f64, w: f64 },
-    /// `∂P/∂u = slope` (or `∂P/∂v`) with weight `w`.
-    Slope { phi: [f64; 15], slope: f64, w: f64 },
+struct Local {
+    u: f64,
+    v: f64,
+    z: f64,
+    /// The weight ω of its equations.
+    w: f64,
+    /// The slopes `(∂P/∂u, ∂P/∂v)` its normal asks for, when it enters the fit.
+    slope: Option<[f64; 2]>,
 }
 
-/// Calls `f` with every equation the samples within the support give.
-fn for_each_row(
+/// Fills `locals` with the samples within the support whose normal faces the frame.
+fn local_samples(
     samples: &[Sample],
     centre: &Point,
     frame: &(Vector, Vector, Vector),
-    inv_r2: f64,
     radius: f64,
     normals: NormalData,
-    mut f: impl FnMut(Row),
+    locals: &mut Vec<Local>,
 ) {
     let (t1, t2, n) = frame;
+    let inv_r2 = 1.0 / (radius * radius);
+    locals.clear();
     for sample in samples {
         let d = sample.point - centre;
         let s = d.norm_squared() * inv_r2;
@@ -412,32 +343,171 @@ fn for_each_row(
         if !(c > 0.0) {
             continue;
         }
-        let w = (1.0 - s) * (1.0 - s) * (1.0 - s);
-        // Scaled coordinates keep the normal equations O(1) whatever the units.
-        let (u, v, z) = (d.dot(t1) / radius, d.dot(t2) / radius, d.dot(n) / radius);
-        f(Row::Height {
-            phi: monomials(u, v),
-            z,
-            w,
-        });
-        if normals == NormalData::Slopes {
+        let slope = (normals == NormalData::Slopes && c > 0.5).then(|| {
             let nu = &sample.normal;
             let (a, b) = (nu.dot(t1), nu.dot(t2));
-            if c > 0.5 {
-                let (du, dv) = monomial_gradients(u, v);
-                f(Row::Slope {
-                    phi: du,
-                    slope: -a / c,
-                    w,
-                });
-                f(Row::Slope {
-                    phi: dv,
-                    slope: -b / c,
-                    w,
-                });
+            [-a / c, -b / c]
+        });
+        // Scaled coordinates keep the normal equations O(1) whatever the units.
+        locals.push(Local {
+            u: d.dot(t1) / radius,
+            v: d.dot(t2) / radius,
+            z: d.dot(n) / radius,
+            w: (1.0 - s) * (1.0 - s) * (1.0 - s),
+            slope,
+        });
+    }
+}
+
+/// Index of `u^p v^q` among the monomials ordered by total degree (the order of
+/// [`MONOMIALS`], continued to higher degrees).
+const fn moment(p: i32, q: i32) -> usize {
+    let d = (p + q) as usize;
+    d * (d + 1) / 2 + q as usize
+}
+
+/// The first `K` monomials `u^p v^q` in the order of [`moment`]: each degree is the previous
+/// one times `u`, and the last term times `v`.
+fn powers<const K: usize>(u: f64, v: f64) -> [f64; K] {
+    let mut p = [0.0; K];
+    p[0] = 1.0;
+    let (mut d, mut start) = (1, 1);
+    while start + d < K {
+        let prev = start - d;
+        for j in 0..d {
+            p[start + j] = p[prev + j] * u;
+        }
+        p[start + d] = p[prev + d - 1] * v;
+        start += d + 1;
+        d += 1;
+    }
+    p
+}
+
+/// Weighted moments of the support. A product of two monomials is a monomial, so every entry
+/// of the normal equations is one of these sums: 45 per sample (degree ≤ 8) build the 120
+/// distinct entries of each 15 × 15 matrix, and the slopes' matrices reuse them.
+struct Moments {
+    /// `Σ ω u^p v^q` over the heights, degree ≤ 8.
+    h: [f64; 45],
+    /// `Σ ω² u^p v^q` over the heights, for the variance of the coefficients.
+    h2: [f64; 45],
+    /// `Σ ω z u^p v^q`, degree ≤ 4.
+    hz: [f64; 15],
+    /// `Σ ω u^p v^q` over the samples with slopes, degree ≤ 6.
+    s: [f64; 28],
+    /// `Σ ω² u^p v^q` over the samples with slopes.
+    s2: [f64; 28],
+    /// `Σ ω s_u u^p v^q` and `Σ ω s_v u^p v^q`, degree ≤ 3.
+    su: [f64; 10],
+    sv: [f64; 10],
+    /// Samples, and samples with slopes.
+    heights: usize,
+    slope_samples: usize,
+    /// `Σ ω` over the height equations, and over the slope equations (two per sample).
+    weight_h: f64,
+    weight_s: f64,
+}
+
+impl Moments {
+    fn of(locals: &[Local]) -> Self {
+        let mut m = Self {
+            h: [0.0; 45],
+            h2: [0.0; 45],
+            hz: [0.0; 15],
+            s: [0.0; 28],
+            s2: [0.0; 28],
+            su: [0.0; 10],
+            sv: [0.0; 10],
+            heights: locals.len(),
+            slope_samples: 0,
+            weight_h: 0.0,
+            weight_s: 0.0,
+        };
+        for l in locals {
+            let p = powers::<45>(l.u, l.v);
+            let (w, w2) = (l.w, l.w * l.w);
+            for ((h, h2), &p) in m.h.iter_mut().zip(&mut m.h2).zip(&p) {
+                *h += w * p;
+                *h2 += w2 * p;
+            }
+            let wz = w * l.z;
+            for (hz, &p) in m.hz.iter_mut().zip(&p) {
+                *hz += wz * p;
+            }
+            m.weight_h += w;
+            if let Some([a, b]) = l.slope {
+                for ((s, s2), &p) in m.s.iter_mut().zip(&mut m.s2).zip(&p) {
+                    *s += w * p;
+                    *s2 += w2 * p;
+                }
+                let (wa, wb) = (w * a, w * b);
+                for ((su, sv), &p) in m.su.iter_mut().zip(&mut m.sv).zip(&p) {
+                    *su += wa * p;
+                    *sv += wb * p;
+                }
+                m.weight_s += 2.0 * w;
+                m.slope_samples += 1;
             }
         }
+        m
     }
+
+    /// `Σ ω φ φᵀ` of the heights from their moments `mu`.
+    fn height_matrix<const N: usize>(mu: &[f64]) -> SMatrix<f64, N, N> {
+        SMatrix::from_fn(|a, b| {
+            let ((ia, ja), (ib, jb)) = (MONOMIALS[a], MONOMIALS[b]);
+            mu[moment(ia + ib, ja + jb)]
+        })
+    }
+
+    /// `Σ ω (∂_u φ ∂_u φᵀ + ∂_v φ ∂_v φᵀ)` of the slopes from their moments `mu`.
+    fn slope_matrix<const N: usize>(mu: &[f64]) -> SMatrix<f64, N, N> {
+        SMatrix::from_fn(|a, b| {
+            let ((ia, ja), (ib, jb)) = (MONOMIALS[a], MONOMIALS[b]);
+            let mut x = 0.0;
+            if ia > 0 && ib > 0 {
+                x += f64::from(ia * ib) * mu[moment(ia + ib - 2, ja + jb)];
+            }
+            if ja > 0 && jb > 0 {
+                x += f64::from(ja * jb) * mu[moment(ia + ib, ja + jb - 2)];
+            }
+            x
+        })
+    }
+
+    /// `Σ ω z φ`.
+    fn height_rhs<const N: usize>(&self) -> SVector<f64, N> {
+        SVector::from_fn(|a, _| self.hz[a])
+    }
+
+    /// `Σ ω (s_u ∂_u φ + s_v ∂_v φ)`.
+    fn slope_rhs<const N: usize>(&self) -> SVector<f64, N> {
+        SVector::from_fn(|a, _| {
+            let (i, j) = MONOMIALS[a];
+            let mut x = 0.0;
+            if i > 0 {
+                x += f64::from(i) * self.su[moment(i - 1, j)];
+            }
+            if j > 0 {
+                x += f64::from(j) * self.sv[moment(i, j - 1)];
+            }
+            x
+        })
+    }
+}
+
+/// The coefficients of `∂_u` and `∂_v` of `Σ_k x_k φ_k` on the monomials of degree ≤ 3
+/// (`x` has 15 entries, zero past the fitted ones).
+fn gradient_coefficients<T: Copy + Default + std::ops::Mul<f64, Output = T>>(
+    x: &[T; 15],
+) -> ([T; 10], [T; 10]) {
+    let (mut du, mut dv) = ([T::default(); 10], [T::default(); 10]);
+    for (k, &(i, j)) in MONOMIALS.iter().enumerate().take(10) {
+        du[k] = x[moment(i + 1, j)] * f64::from(i + 1);
+        dv[k] = x[moment(i, j + 1)] * f64::from(j + 1);
+    }
+    (du, dv)
 }
 
 /// A solved fit in scaled coordinates.
@@ -463,31 +533,25 @@ const MAX_SLOPE_WEIGHT: f64 = 1e4;
 /// Solves the leading `N × N` block, with the slope equations weighted by the ratio of the
 /// two estimated noise variances (one re-weighting from an equal start).
 fn solve<const N: usize>(
-    rows: &[Row],
+    locals: &[Local],
     normals: NormalData,
-    heights: &Equations,
-    slopes: &Equations,
+    moments: &Moments,
 ) -> Option<Solution> {
-    let block = |m: &SMatrix<f64, 15, 15>| -> SMatrix<f64, N, N> {
-        m.fixed_view::<N, N>(0, 0).into_owned()
-    };
     let (hp, hp2, sp, sp2) = (
-        block(&heights.m),
-        block(&heights.m2),
-        block(&slopes.m),
-        block(&slopes.m2),
+        Moments::height_matrix::<N>(&moments.h),
+        Moments::height_matrix::<N>(&moments.h2),
+        Moments::slope_matrix::<N>(&moments.s),
+        Moments::slope_matrix::<N>(&moments.s2),
     );
-    let (rp, rs) = (
-        heights.rhs.fixed_view::<N, 1>(0, 0).into_owned(),
-        slopes.rhs.fixed_view::<N, 1>(0, 0).into_owned(),
-    );
-    let use_slopes = normals == NormalData::Slopes && slopes.weight > 0.0;
+    let (rp, rs) = (moments.height_rhs::<N>(), moments.slope_rhs::<N>());
+    let (weight_h, weight_s) = (moments.weight_h, moments.weight_s);
+    let use_slopes = normals == NormalData::Slopes && weight_s > 0.0;
     let mut lambda = if use_slopes { 1.0 } else { 0.0 };
     let rounds = if use_slopes { 2 } else { 1 };
     let mut result = None;
     for round in 0..rounds {
         // The covariance is kept from the last round only: its sandwich is formed there.
-        let last = round + 1 == rounds;
+        let sandwich = use_slopes && round + 1 == rounds;
         let a = hp + sp * lambda;
         let chol = Cholesky::new(a)?;
         // A pivot far below the diagonal's scale means the basis is not determined by the
@@ -498,50 +562,47 @@ fn solve<const N: usize>(
             return None;
         }
         let solved = chol.solve(&(rp + rs * lambda));
+        let inv = cholesky_inverse(l);
         let mut c = [0.0; 15];
         c[..N].copy_from_slice(solved.as_slice());
-        let inv = chol.inverse();
+        let (cu, cv) = gradient_coefficients(&c);
+        // The columns of M⁻¹ that give (c20, c11, c02), as rows per coefficient.
+        let mut sel = [Vector::zeros(); 15];
+        for (k, s) in sel.iter_mut().enumerate().take(N) {
+            *s = Vector::new(inv[(k, A20)], inv[(k, A11)], inv[(k, A02)]);
+        }
+        let (sel_u, sel_v) = gradient_coefficients(&sel);
         // Weighted residuals from the samples again (yᵀΩy − cᵀAᵀΩy loses the digits of a
         // small residual).
         let (mut rss_h, mut rss_s) = (0.0, 0.0);
         // With slopes, each sample's height and slope errors share its displacement: the
         // covariance is the cluster-robust sandwich M⁻¹ (Σ_samples g gᵀ) M⁻¹, g = Σ ω r φ over
-        // the sample's rows (a height row opens each sample).
-        let mut meat = SMatrix::<f64, N, N>::zeros();
-        let mut g = SVector::<f64, N>::zeros();
-        let mut samples = 0usize;
-        for row in rows {
-            let (phi, y, w) = match *row {
-                Row::Height { phi, z, w } => {
-                    if samples > 0 && use_slopes && last {
-                        meat += g * g.transpose();
-                    }
-                    g.fill(0.0);
-                    samples += 1;
-                    (phi, z, w)
-                }
-                Row::Slope { phi, slope, w } => (phi, slope, w * lambda),
-            };
-            let p: f64 = (0..N).map(|k| c[k] * phi[k]).sum();
-            let r = y - p;
-            match row {
-                Row::Height { .. } => rss_h += w * r * r,
-                Row::Slope { .. } => rss_s += w / lambda * r * r,
+        // the sample's equations; only its (c20, c11, c02) block is formed.
+        let mut meat = Matrix::zeros();
+        for l in locals {
+            let p = powers::<15>(l.u, l.v);
+            let r = l.z - dot(&c, &p);
+            rss_h += l.w * r * r;
+            let mut g = Vector::zeros();
+            if sandwich {
+                g = combine(&sel, &p) * (l.w * r);
             }
-            if use_slopes && last {
-                for k in 0..N {
-                    g[k] += w * r * phi[k];
+            if let (true, Some([a, b])) = (use_slopes, l.slope) {
+                let (ru, rv) = (a - dot(&cu, &p), b - dot(&cv, &p));
+                rss_s += l.w * (ru * ru + rv * rv);
+                if sandwich {
+                    g += (combine(&sel_u, &p) * ru + combine(&sel_v, &p) * rv) * (l.w * lambda);
                 }
             }
-        }
-        if use_slopes && last {
-            meat += g * g.transpose();
+            if sandwich {
+                meat += g * g.transpose();
+            }
         }
         // Degrees of freedom left to each kind of data: Σω − its share of the hat matrix's
         // trace (exact for one kind of data with independent noise).
         // tr(M⁻¹M₂) as the Frobenius product (both symmetric): 225 products, not 3375.
-        let dof_h = heights.weight - inv.dot(&hp2);
-        let dof_s = slopes.weight - lambda * inv.dot(&sp2);
+        let dof_h = weight_h - inv.dot(&hp2);
+        let dof_s = weight_s - lambda * inv.dot(&sp2);
         if !(dof_h > 0.0) {
             return None;
         }
@@ -551,18 +612,19 @@ fn solve<const N: usize>(
         } else {
             0.0
         };
-        let sel = inv.fixed_columns::<3>(A20).into_owned();
-        let cov_m = if use_slopes && samples > N {
+        let samples = moments.heights;
+        let covariance = if sandwich && samples > N {
             // Small-sample factor n/(n − p) of the sandwich.
             meat * (samples as f64 / (samples - N) as f64)
         } else {
-            hp2 * var_h + sp2 * (lambda * lambda * var_s)
+            let sel = inv.fixed_columns::<3>(A20).into_owned();
+            let cov = sel.transpose() * (hp2 * var_h + sp2 * (lambda * lambda * var_s)) * sel;
+            Matrix::from_fn(|i, j| cov[(i, j)])
         };
-        let cov = sel.transpose() * cov_m * sel;
         result = Some(Solution {
             c,
             height_noise: var_h.sqrt(),
-            covariance: Matrix::from_fn(|i, j| cov[(i, j)]),
+            covariance,
         });
         if use_slopes {
             lambda = if var_s > 0.0 {
@@ -575,67 +637,37 @@ fn solve<const N: usize>(
     result
 }
 
-/// The monomials `u^i v^j` in [`MONOMIALS`] order.
-fn monomials(u: f64, v: f64) -> [f64; 15] {
-    let (u2, v2) = (u * u, v * v);
-    let (u3, v3) = (u2 * u, v2 * v);
-    [
-        1.0,
-        u,
-        v,
-        u2,
-        u * v,
-        v2,
-        u3,
-        u2 * v,
-        u * v2,
-        v3,
-        u2 * u2,
-        u3 * v,
-        u2 * v2,
-        u * v3,
-        v2 * v2,
-    ]
+/// `Σ_k x_k p_k` over the first `x.len()` monomials.
+fn dot(x: &[f64], p: &[f64; 15]) -> f64 {
+    x.iter().zip(p).map(|(x, p)| x * p).sum()
 }
 
-/// `(∂/∂u, ∂/∂v)` of the monomials, in [`MONOMIALS`] order.
-fn monomial_gradients(u: f64, v: f64) -> ([f64; 15], [f64; 15]) {
-    let (u2, v2, uv) = (u * u, v * v, u * v);
-    let du = [
-        0.0,
-        1.0,
-        0.0,
-        2.0 * u,
-        v,
-        0.0,
-        3.0 * u2,
-        2.0 * uv,
-        v2,
-        0.0,
-        4.0 * u2 * u,
-        3.0 * u2 * v,
-        2.0 * u * v2,
-        v2 * v,
-        0.0,
-    ];
-    let dv = [
-        0.0,
-        0.0,
-        1.0,
-        0.0,
-        u,
-        2.0 * v,
-        0.0,
-        u2,
-        2.0 * uv,
-        3.0 * v2,
-        0.0,
-        u2 * u,
-        2.0 * u2 * v,
-        3.0 * u * v2,
-        4.0 * v2 * v,
-    ];
-    (du, dv)
+/// `Σ_k s_k p_k` for 3-vectors `s_k`.
+fn combine(s: &[Vector], p: &[f64; 15]) -> Vector {
+    s.iter()
+        .zip(p)
+        .fold(Vector::zeros(), |acc, (s, &p)| acc + s * p)
+}
+
+/// `M⁻¹ = L⁻ᵀ L⁻¹` from the Cholesky factor `L` (only its lower triangle is read).
+fn cholesky_inverse<const N: usize>(l: &SMatrix<f64, N, N>) -> SMatrix<f64, N, N> {
+    let mut li = SMatrix::<f64, N, N>::zeros();
+    for j in 0..N {
+        li[(j, j)] = 1.0 / l[(j, j)];
+        for i in j + 1..N {
+            let s: f64 = (j..i).map(|k| l[(i, k)] * li[(k, j)]).sum();
+            li[(i, j)] = -s / l[(i, i)];
+        }
+    }
+    let mut inv = SMatrix::<f64, N, N>::zeros();
+    for i in 0..N {
+        for j in 0..=i {
+            let s: f64 = (i..N).map(|k| li[(k, i)] * li[(k, j)]).sum();
+            inv[(i, j)] = s;
+            inv[(j, i)] = s;
+        }
+    }
+    inv
 }
 
 /// Curvature of a fit at its foot point, with the predicted standard deviations.
