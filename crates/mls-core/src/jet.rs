@@ -34,8 +34,6 @@
 //! the scatter; the returned scale has the least estimated `sd² + bias²` ([`choose_scale`]).
 //! `docs/derivation.md` has the details and `mls_ad::jet_witness` recomputes all of it.
 
-use nalgebra::{Cholesky, SMatrix, SVector};
-
 use crate::curvature::{Curvature, curvature};
 use crate::field::Sample;
 use crate::math::{Matrix, Point, Vector, tangent_basis};
@@ -317,6 +315,8 @@ struct Local {
     w: f64,
     /// The slopes `(∂P/∂u, ∂P/∂v)` its normal asks for, when it enters the fit.
     slope: Option<[f64; 2]>,
+    /// The monomials `φ(u, v)` of degree ≤ 4, kept for the residual passes.
+    p: [f64; 15],
 }
 
 /// Fills `locals` with the samples within the support whose normal faces the frame.
@@ -355,6 +355,7 @@ fn local_samples(
             z: d.dot(n) / radius,
             w: (1.0 - s) * (1.0 - s) * (1.0 - s),
             slope,
+            p: [0.0; 15],
         });
     }
 }
@@ -410,7 +411,8 @@ struct Moments {
 }
 
 impl Moments {
-    fn of(locals: &[Local]) -> Self {
+    /// The moments of `locals`, whose monomials it fills in.
+    fn of(locals: &mut [Local]) -> Self {
         let mut m = Self {
             h: [0.0; 45],
             h2: [0.0; 45],
@@ -426,6 +428,7 @@ impl Moments {
         };
         for l in locals {
             let p = powers::<45>(l.u, l.v);
+            l.p.copy_from_slice(&p[..15]);
             let (w, w2) = (l.w, l.w * l.w);
             for ((h, h2), &p) in m.h.iter_mut().zip(&mut m.h2).zip(&p) {
                 *h += w * p;
@@ -453,46 +456,16 @@ impl Moments {
         m
     }
 
-    /// `Σ ω φ φᵀ` of the heights from their moments `mu`.
-    fn height_matrix<const N: usize>(mu: &[f64]) -> SMatrix<f64, N, N> {
-        SMatrix::from_fn(|a, b| {
-            let ((ia, ja), (ib, jb)) = (MONOMIALS[a], MONOMIALS[b]);
-            mu[moment(ia + ib, ja + jb)]
-        })
-    }
-
-    /// `Σ ω (∂_u φ ∂_u φᵀ + ∂_v φ ∂_v φᵀ)` of the slopes from their moments `mu`.
-    fn slope_matrix<const N: usize>(mu: &[f64]) -> SMatrix<f64, N, N> {
-        SMatrix::from_fn(|a, b| {
-            let ((ia, ja), (ib, jb)) = (MONOMIALS[a], MONOMIALS[b]);
-            let mut x = 0.0;
-            if ia > 0 && ib > 0 {
-                x += f64::from(ia * ib) * mu[moment(ia + ib - 2, ja + jb)];
-            }
-            if ja > 0 && jb > 0 {
-                x += f64::from(ja * jb) * mu[moment(ia + ib, ja + jb - 2)];
-            }
-            x
-        })
-    }
-
     /// `Σ ω z φ`.
-    fn height_rhs<const N: usize>(&self) -> SVector<f64, N> {
-        SVector::from_fn(|a, _| self.hz[a])
+    fn height_rhs<const N: usize>(&self) -> [f64; N] {
+        std::array::from_fn(|a| self.hz[a])
     }
 
     /// `Σ ω (s_u ∂_u φ + s_v ∂_v φ)`.
-    fn slope_rhs<const N: usize>(&self) -> SVector<f64, N> {
-        SVector::from_fn(|a, _| {
-            let (i, j) = MONOMIALS[a];
-            let mut x = 0.0;
-            if i > 0 {
-                x += f64::from(i) * self.su[moment(i - 1, j)];
-            }
-            if j > 0 {
-                x += f64::from(j) * self.sv[moment(i, j - 1)];
-            }
-            x
+    fn slope_rhs<const N: usize>(&self) -> [f64; N] {
+        std::array::from_fn(|a| {
+            let (fu, iu, fv, iv) = DERIVATIVE[a];
+            fu * self.su[iu] + fv * self.sv[iv]
         })
     }
 }
@@ -530,6 +503,88 @@ pub const SD_FLOOR: f64 = 1e-8;
 /// noise estimates is unreliable beyond this.
 const MAX_SLOPE_WEIGHT: f64 = 1e4;
 
+/// A square matrix as rows, for the small dense algebra of [`solve`].
+type Square<const N: usize> = [[f64; N]; N];
+
+/// `∂_u φ_a = f_u φ[i_u]` and `∂_v φ_a = f_v φ[i_v]` for each monomial `a` (a factor 0 where
+/// the monomial has no `u`, or no `v`).
+const DERIVATIVE: [(f64, usize, f64, usize); 15] = {
+    let mut t = [(0.0, 0, 0.0, 0); 15];
+    let mut a = 0;
+    while a < 15 {
+        let (i, j) = MONOMIALS[a];
+        if i > 0 {
+            t[a].0 = i as f64;
+            t[a].1 = moment(i - 1, j);
+        }
+        if j > 0 {
+            t[a].2 = j as f64;
+            t[a].3 = moment(i, j - 1);
+        }
+        a += 1;
+    }
+    t
+};
+
+/// `(i_a + i_b, j_a + j_b)` as a [`moment`] index, for every pair of monomials: the entry
+/// `(a, b)` of the heights' normal matrix.
+const PRODUCT: [[usize; 15]; 15] = {
+    let mut t = [[0; 15]; 15];
+    let mut a = 0;
+    while a < 15 {
+        let mut b = 0;
+        while b < 15 {
+            t[a][b] = moment(
+                MONOMIALS[a].0 + MONOMIALS[b].0,
+                MONOMIALS[a].1 + MONOMIALS[b].1,
+            );
+            b += 1;
+        }
+        a += 1;
+    }
+    t
+};
+
+/// The entry `(a, b)` of the slopes' normal matrix as `f_u μ[i_u] + f_v μ[i_v]`: the moments
+/// of `∂_u φ_a ∂_u φ_b = i_a i_b u^(i_a+i_b−2) v^(j_a+j_b)` and of its `v` counterpart
+/// (a factor 0 where a monomial has no `u`, or no `v`).
+const SLOPE_PRODUCT: [[(f64, usize, f64, usize); 15]; 15] = {
+    let mut t = [[(0.0, 0, 0.0, 0); 15]; 15];
+    let mut a = 0;
+    while a < 15 {
+        let mut b = 0;
+        while b < 15 {
+            let ((ia, ja), (ib, jb)) = (MONOMIALS[a], MONOMIALS[b]);
+            if ia > 0 && ib > 0 {
+                t[a][b].0 = (ia * ib) as f64;
+                t[a][b].1 = moment(ia + ib - 2, ja + jb);
+            }
+            if ja > 0 && jb > 0 {
+                t[a][b].2 = (ja * jb) as f64;
+                t[a][b].3 = moment(ia + ib, ja + jb - 2);
+            }
+            b += 1;
+        }
+        a += 1;
+    }
+    t
+};
+
+/// `Σ ω φ φᵀ` of the heights from their moments `mu`.
+fn height_matrix<const N: usize>(mu: &[f64]) -> Square<N> {
+    std::array::from_fn(|a| std::array::from_fn(|b| mu[PRODUCT[a][b]]))
+}
+
+/// `Σ ω (∂_u φ ∂_u φᵀ + ∂_v φ ∂_v φᵀ)` of the slopes from their moments `mu`.
+fn slope_matrix<const N: usize>(mu: &[f64]) -> Square<N> {
+    std::array::from_fn(|a| {
+        std::array::from_fn(|b| {
+            let (fu, iu, fv, iv) = SLOPE_PRODUCT[a][b];
+            fu * mu[iu] + fv * mu[iv]
+        })
+    })
+}
+
 /// Solves the leading `N × N` block, with the slope equations weighted by the ratio of the
 /// two estimated noise variances (one re-weighting from an equal start).
 fn solve<const N: usize>(
@@ -538,10 +593,10 @@ fn solve<const N: usize>(
     moments: &Moments,
 ) -> Option<Solution> {
     let (hp, hp2, sp, sp2) = (
-        Moments::height_matrix::<N>(&moments.h),
-        Moments::height_matrix::<N>(&moments.h2),
-        Moments::slope_matrix::<N>(&moments.s),
-        Moments::slope_matrix::<N>(&moments.s2),
+        height_matrix::<N>(&moments.h),
+        height_matrix::<N>(&moments.h2),
+        slope_matrix::<N>(&moments.s),
+        slope_matrix::<N>(&moments.s2),
     );
     let (rp, rs) = (moments.height_rhs::<N>(), moments.slope_rhs::<N>());
     let (weight_h, weight_s) = (moments.weight_h, moments.weight_s);
@@ -552,24 +607,18 @@ fn solve<const N: usize>(
     for round in 0..rounds {
         // The covariance is kept from the last round only: its sandwich is formed there.
         let sandwich = use_slopes && round + 1 == rounds;
-        let a = hp + sp * lambda;
-        let chol = Cholesky::new(a)?;
-        // A pivot far below the diagonal's scale means the basis is not determined by the
-        // samples (too few, or on a line): treat as singular rather than fit noise.
-        let l = chol.l_dirty();
-        let max_diag = (0..N).map(|i| a[(i, i)]).fold(0.0f64, f64::max);
-        if (0..N).any(|i| !(l[(i, i)] * l[(i, i)] > 1e-10 * max_diag)) {
-            return None;
-        }
-        let solved = chol.solve(&(rp + rs * lambda));
-        let inv = cholesky_inverse(l);
+        let a: Square<N> =
+            std::array::from_fn(|i| std::array::from_fn(|j| hp[i][j] + sp[i][j] * lambda));
+        let rhs: [f64; N] = std::array::from_fn(|i| rp[i] + rs[i] * lambda);
+        let factor = cholesky(&a)?;
+        let inv = factor.inverse();
         let mut c = [0.0; 15];
-        c[..N].copy_from_slice(solved.as_slice());
+        c[..N].copy_from_slice(&factor.solve(&rhs));
         let (cu, cv) = gradient_coefficients(&c);
         // The columns of M⁻¹ that give (c20, c11, c02), as rows per coefficient.
         let mut sel = [Vector::zeros(); 15];
         for (k, s) in sel.iter_mut().enumerate().take(N) {
-            *s = Vector::new(inv[(k, A20)], inv[(k, A11)], inv[(k, A02)]);
+            *s = Vector::new(inv[k][A20], inv[k][A11], inv[k][A02]);
         }
         let (sel_u, sel_v) = gradient_coefficients(&sel);
         // Weighted residuals from the samples again (yᵀΩy − cᵀAᵀΩy loses the digits of a
@@ -580,18 +629,18 @@ fn solve<const N: usize>(
         // the sample's equations; only its (c20, c11, c02) block is formed.
         let mut meat = Matrix::zeros();
         for l in locals {
-            let p = powers::<15>(l.u, l.v);
-            let r = l.z - dot(&c, &p);
+            let p = &l.p;
+            let r = l.z - dot(&c, p);
             rss_h += l.w * r * r;
             let mut g = Vector::zeros();
             if sandwich {
-                g = combine(&sel, &p) * (l.w * r);
+                g = combine(&sel, p) * (l.w * r);
             }
             if let (true, Some([a, b])) = (use_slopes, l.slope) {
-                let (ru, rv) = (a - dot(&cu, &p), b - dot(&cv, &p));
+                let (ru, rv) = (a - dot(&cu, p), b - dot(&cv, p));
                 rss_s += l.w * (ru * ru + rv * rv);
                 if sandwich {
-                    g += (combine(&sel_u, &p) * ru + combine(&sel_v, &p) * rv) * (l.w * lambda);
+                    g += (combine(&sel_u, p) * ru + combine(&sel_v, p) * rv) * (l.w * lambda);
                 }
             }
             if sandwich {
@@ -600,9 +649,8 @@ fn solve<const N: usize>(
         }
         // Degrees of freedom left to each kind of data: Σω − its share of the hat matrix's
         // trace (exact for one kind of data with independent noise).
-        // tr(M⁻¹M₂) as the Frobenius product (both symmetric): 225 products, not 3375.
-        let dof_h = weight_h - inv.dot(&hp2);
-        let dof_s = weight_s - lambda * inv.dot(&sp2);
+        let dof_h = weight_h - trace_product(&inv, &hp2);
+        let dof_s = weight_s - lambda * trace_product(&inv, &sp2);
         if !(dof_h > 0.0) {
             return None;
         }
@@ -613,13 +661,21 @@ fn solve<const N: usize>(
             0.0
         };
         let samples = moments.heights;
-        let covariance = if sandwich && samples > N {
+        let covariance = if round + 1 < rounds {
+            // This round only weighs the slopes for the next.
+            Matrix::zeros()
+        } else if sandwich && samples > N {
             // Small-sample factor n/(n − p) of the sandwich.
             meat * (samples as f64 / (samples - N) as f64)
         } else {
-            let sel = inv.fixed_columns::<3>(A20).into_owned();
-            let cov = sel.transpose() * (hp2 * var_h + sp2 * (lambda * lambda * var_s)) * sel;
-            Matrix::from_fn(|i, j| cov[(i, j)])
+            // selᵀ (M₂ʰ σ̂ₕ² + M₂ˢ λ² σ̂ₛ²) sel.
+            let var_s = lambda * lambda * var_s;
+            (0..N).fold(Matrix::zeros(), |cov, j| {
+                let column: Vector = (0..N)
+                    .map(|i| sel[i] * (hp2[i][j] * var_h + sp2[i][j] * var_s))
+                    .sum();
+                cov + column * sel[j].transpose()
+            })
         };
         result = Some(Solution {
             c,
@@ -649,25 +705,84 @@ fn combine(s: &[Vector], p: &[f64; 15]) -> Vector {
         .fold(Vector::zeros(), |acc, (s, &p)| acc + s * p)
 }
 
-/// `M⁻¹ = L⁻ᵀ L⁻¹` from the Cholesky factor `L` (only its lower triangle is read).
-fn cholesky_inverse<const N: usize>(l: &SMatrix<f64, N, N>) -> SMatrix<f64, N, N> {
-    let mut li = SMatrix::<f64, N, N>::zeros();
-    for j in 0..N {
-        li[(j, j)] = 1.0 / l[(j, j)];
-        for i in j + 1..N {
-            let s: f64 = (j..i).map(|k| l[(i, k)] * li[(k, j)]).sum();
-            li[(i, j)] = -s / l[(i, i)];
-        }
-    }
-    let mut inv = SMatrix::<f64, N, N>::zeros();
+/// `tr(A B)` of two symmetric matrices, as their Frobenius product (N² products, not N³).
+fn trace_product<const N: usize>(a: &Square<N>, b: &Square<N>) -> f64 {
+    a.iter()
+        .zip(b)
+        .map(|(a, b)| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>())
+        .sum()
+}
+
+/// A Cholesky factor `L` (`LLᵀ = A`) with the reciprocals of its diagonal.
+struct Factor<const N: usize> {
+    l: Square<N>,
+    inv_diag: [f64; N],
+}
+
+/// The lower Cholesky factor of the symmetric `a`, or `None` when a squared pivot falls below
+/// `1e-10` of the largest diagonal entry: the basis is then not determined by the samples (too
+/// few, or on a line), and fitting it would fit noise.
+fn cholesky<const N: usize>(a: &Square<N>) -> Option<Factor<N>> {
+    let max_diag = (0..N).map(|i| a[i][i]).fold(0.0f64, f64::max);
+    let mut l = [[0.0; N]; N];
+    let mut inv_diag = [0.0; N];
     for i in 0..N {
-        for j in 0..=i {
-            let s: f64 = (i..N).map(|k| li[(k, i)] * li[(k, j)]).sum();
-            inv[(i, j)] = s;
-            inv[(j, i)] = s;
+        for j in 0..i {
+            l[i][j] = (a[i][j] - dot_prefix(&l[i], &l[j], j)) * inv_diag[j];
         }
+        let s = a[i][i] - dot_prefix(&l[i], &l[i], i);
+        if !(s > 1e-10 * max_diag) {
+            return None;
+        }
+        l[i][i] = s.sqrt();
+        inv_diag[i] = 1.0 / l[i][i];
     }
-    inv
+    Some(Factor { l, inv_diag })
+}
+
+/// `Σ_{k<n} x_k y_k`.
+fn dot_prefix(x: &[f64], y: &[f64], n: usize) -> f64 {
+    x[..n].iter().zip(&y[..n]).map(|(x, y)| x * y).sum()
+}
+
+impl<const N: usize> Factor<N> {
+    /// `x` with `LLᵀ x = b`, by forward and back substitution.
+    fn solve(&self, b: &[f64; N]) -> [f64; N] {
+        let (l, d) = (&self.l, &self.inv_diag);
+        let mut y = [0.0; N];
+        for i in 0..N {
+            y[i] = (b[i] - dot_prefix(&l[i], &y, i)) * d[i];
+        }
+        let mut x = [0.0; N];
+        for i in (0..N).rev() {
+            let s: f64 = (i + 1..N).map(|k| l[k][i] * x[k]).sum();
+            x[i] = (y[i] - s) * d[i];
+        }
+        x
+    }
+
+    /// `A⁻¹ = L⁻ᵀ L⁻¹`.
+    fn inverse(&self) -> Square<N> {
+        let (l, d) = (&self.l, &self.inv_diag);
+        // L⁻¹ stored transposed (row j holds column j), so both loops below run along rows.
+        let mut lit = [[0.0; N]; N];
+        for j in 0..N {
+            lit[j][j] = d[j];
+            for i in j + 1..N {
+                let s: f64 = (j..i).map(|k| l[i][k] * lit[j][k]).sum();
+                lit[j][i] = -s * d[i];
+            }
+        }
+        let mut inv = [[0.0; N]; N];
+        for i in 0..N {
+            for j in 0..=i {
+                let s: f64 = (i..N).map(|k| lit[i][k] * lit[j][k]).sum();
+                inv[i][j] = s;
+                inv[j][i] = s;
+            }
+        }
+        inv
+    }
 }
 
 /// Curvature of a fit at its foot point, with the predicted standard deviations.
