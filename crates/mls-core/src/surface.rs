@@ -343,11 +343,24 @@ impl Evaluator<'_> {
         let mut agree_last = true;
         let mut failure = PointStatus::NoNeighbours;
         let (mut lo, mut hi) = ([f64::NEG_INFINITY; 2], [f64::INFINITY; 2]);
-        for j in 0..config.scales.max(1) {
-            let radius = config.radius * h * std::f64::consts::SQRT_2.powi(j as i32);
-            self.gather(&local, Some(radius));
-            if self.support.len() < 6 {
-                failure = if self.support.is_empty() {
+        let scales = config.scales.max(1);
+        let radius_of = |j: usize| config.radius * h * std::f64::consts::SQRT_2.powi(j as i32);
+        // The support is gathered for two scales at a time; the fit keeps its own radius.
+        let mut gathered = 0.0;
+        for j in 0..scales {
+            let radius = radius_of(j);
+            if radius > gathered {
+                gathered = radius_of((j + 1).min(scales - 1));
+                self.gather(&local, Some(gathered));
+            }
+            let r2 = radius * radius;
+            let inside = self
+                .support
+                .iter()
+                .filter(|s| (s.point - local).norm_squared() <= r2)
+                .count();
+            if inside < 6 {
+                failure = if inside == 0 {
                     PointStatus::NoNeighbours
                 } else {
                     PointStatus::TooFewNeighbours
