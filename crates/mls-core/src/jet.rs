@@ -367,22 +367,33 @@ const fn moment(p: i32, q: i32) -> usize {
     d * (d + 1) / 2 + q as usize
 }
 
-/// The first `K` monomials `u^p v^q` in the order of [`moment`]: each degree is the previous
-/// one times `u`, and the last term times `v`.
-fn powers<const K: usize>(u: f64, v: f64) -> [f64; K] {
-    let mut p = [0.0; K];
-    p[0] = 1.0;
-    let (mut d, mut start) = (1, 1);
-    while start + d < K {
-        let prev = start - d;
-        for j in 0..d {
-            p[start + j] = p[prev + j] * u;
+/// The exponents `(p, q)` of the monomials of degree ≤ 8 in the order of [`moment`].
+const EXPONENTS: [(usize, usize); 45] = {
+    let mut t = [(0, 0); 45];
+    let mut d = 0;
+    while d <= 8 {
+        let mut q = 0;
+        while q <= d {
+            t[d * (d + 1) / 2 + q] = (d - q, q);
+            q += 1;
         }
-        p[start + d] = p[prev + d - 1] * v;
-        start += d + 1;
         d += 1;
     }
-    p
+    t
+};
+
+/// The first `K` monomials `u^p v^q` in the order of [`moment`], each a product of two powers
+/// (independent products, not a chain).
+fn powers<const K: usize>(u: f64, v: f64) -> [f64; K] {
+    let (mut up, mut vp) = ([1.0; 9], [1.0; 9]);
+    for i in 1..9 {
+        up[i] = up[i - 1] * u;
+        vp[i] = vp[i - 1] * v;
+    }
+    std::array::from_fn(|k| {
+        let (p, q) = EXPONENTS[k];
+        up[p] * vp[q]
+    })
 }
 
 /// Weighted moments of the support. A product of two monomials is a monomial, so every entry
