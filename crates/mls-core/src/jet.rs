@@ -32,6 +32,7 @@
 //! **Scale.** Support radii `ρ_j = ρ_0 √2^j` form a ladder, climbed while the confidence
 //! intervals `k_j ± Γ sd_j` of every scale so far intersect and the bias has not overtaken
 //! the scatter; the returned scale has the least estimated `sd² + bias²` ([`choose_scale`]).
+//! Fits too thin to trust their own noise estimate ([`trusted`]) are candidates only.
 //! `docs/derivation.md` has the details and `mls_ad::jet_witness` recomputes all of it.
 
 use crate::curvature::{Curvature, curvature};
@@ -113,6 +114,9 @@ pub struct JetFit {
     pub radius: f64,
     /// Samples within the support.
     pub neighbours: usize,
+    /// Equations of the fit: one height per sample, and two slopes per sample whose normal
+    /// enters the fit.
+    pub equations: usize,
     /// Coefficients `a_ij` of `u^i v^j` in the frame, in file units; unused ones are 0.
     pub coefficients: [f64; 15],
     /// Estimated position noise σ̂ (residual standard deviation of the heights), file units.
@@ -285,6 +289,7 @@ pub fn fit(
                 degree: deg,
                 radius,
                 neighbours: count,
+                equations: count + slope_rows,
                 coefficients,
                 noise: solution.height_noise * radius,
                 // (a20, a11, a02) = (c20, c11, c02)/ρ.
@@ -501,6 +506,19 @@ struct Solution {
     height_noise: f64,
     /// Covariance of (c20, c11, c02).
     covariance: Matrix,
+}
+
+/// Equations per coefficient for a fit to enter the ladder's stopping rules (see [`trusted`]).
+pub const TRUSTED_EQUATIONS_PER_COEFFICIENT: f64 = 3.0;
+
+/// Whether a fit has enough equations for its own noise estimate to be trusted by the ladder's
+/// stopping rules: 3 per coefficient. The weight `(1 − d²/ρ²)³` leaves an effective sample
+/// size `(Σω)²/Σω²` of 7/16 of the count on a uniform disc, so at 1.5 equations per coefficient
+/// (enough to determine the fit) the weighted residuals have almost no degrees of freedom left,
+/// σ̂ is unreliable, and one wild fit would stop the climb. Such a fit stays a candidate for
+/// the final choice, where on clean data its small bias wins.
+pub fn trusted(fit: &JetFit) -> bool {
+    fit.equations as f64 >= TRUSTED_EQUATIONS_PER_COEFFICIENT * coefficient_count(fit.degree) as f64
 }
 
 /// Equations (heights and slopes) per coefficient a degree needs.

@@ -341,6 +341,9 @@ impl Evaluator<'_> {
         let mut fallback: Option<JetPoint> = None;
         self.ladder.clear();
         let mut agree_last = true;
+        // Full-degree fits with too few equations to trust their own noise estimate: candidates
+        // for the choice at the front of the ladder, outside its stopping rules.
+        let mut early = 0;
         let mut failure = PointStatus::NoNeighbours;
         let (mut lo, mut hi) = ([f64::NEG_INFINITY; 2], [f64::INFINITY; 2]);
         let scales = config.scales.max(1);
@@ -411,6 +414,11 @@ impl Evaluator<'_> {
                 fallback = fallback.or(Some(p));
                 continue;
             }
+            if best.is_none() && !jet::trusted(&fit) {
+                self.ladder.push(p);
+                early += 1;
+                continue;
+            }
             let k = [p.curvature.k1, p.curvature.k2];
             let mut agree = true;
             for i in 0..2 {
@@ -424,13 +432,15 @@ impl Evaluator<'_> {
                 break;
             }
             best = Some(p);
-            if jet::past_optimum(&self.ladder) {
+            if jet::past_optimum(&self.ladder[early..]) {
                 break;
             }
         }
         if best.is_some() {
             let accepted = self.ladder.len() - usize::from(!agree_last);
             best = Some(jet::choose_scale(&self.ladder, accepted));
+        } else if early > 0 {
+            best = Some(jet::choose_scale(&self.ladder, early));
         }
         best.or(fallback).ok_or(failure)
     }
