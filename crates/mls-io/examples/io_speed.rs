@@ -47,6 +47,7 @@ fn main() -> Result<(), Box<dyn Error>> {
     let cloud = PointCloud {
         points: normals.iter().map(|v| v.map(|c| 2.0 * c)).collect(),
         normals: Some(normals),
+        ..PointCloud::default()
     };
     println!("{n} points");
 

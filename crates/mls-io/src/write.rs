@@ -11,7 +11,9 @@ use std::io::{self, BufWriter, Write};
 use std::path::{Path, PathBuf};
 use std::slice;
 
+use crate::attributes::{Attribute, AttributeData, Scalar};
 use crate::error::WriteError;
+use crate::las::LasTemplate;
 use crate::{FileFormat, detect_format};
 
 /// Size of the output buffer: large enough that a million rows take few system calls.
@@ -55,6 +57,10 @@ pub enum ColumnData<'a> {
         /// The component to write.
         axis: Axis,
     },
+    /// An attribute carried from the input, written in its own type: in PLY as a property of
+    /// that type (64-bit integers as `double`), in LAS as extra bytes of that type or as the
+    /// standard field it came from ([`WriteOptions::las`]).
+    Attribute(&'a AttributeData),
 }
 
 impl ColumnData<'_> {
@@ -64,6 +70,7 @@ impl ColumnData<'_> {
             Self::F64(data) => data.len(),
             Self::I32(data) => data.len(),
             Self::Component { vectors, .. } => vectors.len(),
+            Self::Attribute(data) => data.len(),
         }
     }
 
@@ -77,6 +84,16 @@ impl ColumnData<'_> {
             Self::F64(data) => Cursor::F64(data.iter()),
             Self::I32(data) => Cursor::I32(data.iter()),
             Self::Component { vectors, axis } => Cursor::Component(vectors.iter(), axis),
+            Self::Attribute(data) => Cursor::Attribute(data, 0),
+        }
+    }
+
+    /// The PLY property type written for the column.
+    fn ply_type(&self) -> &'static str {
+        match self {
+            Self::I32(_) => "int",
+            Self::F64(_) | Self::Component { .. } => "double",
+            Self::Attribute(data) => data.ty().ply_name(),
         }
     }
 }
@@ -107,6 +124,14 @@ impl<'a> Column<'a> {
         }
     }
 
+    /// A column of an attribute's values, under its name.
+    pub fn attribute(attribute: &'a Attribute) -> Self {
+        Self {
+            name: &attribute.name,
+            data: ColumnData::Attribute(&attribute.data),
+        }
+    }
+
     /// A floating-point column holding one component of `vectors`.
     pub fn component(name: &'a str, vectors: &'a [[f64; 3]], axis: Axis) -> Self {
         Self {
@@ -124,6 +149,19 @@ pub enum PlyFormat {
     BinaryLittleEndian,
     /// `ascii`: readable, still exact (shortest round-trip decimal form).
     Ascii,
+}
+
+/// How to write a table, beyond its format.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct WriteOptions<'a> {
+    /// The encoding of PLY output.
+    pub ply_format: PlyFormat,
+    /// For LAS/LAZ output, the layout of the LAS input the table came from
+    /// ([`PointCloud::las`](crate::PointCloud::las)): its point format (without waveform
+    /// data), scale and offset, GPS time type, coordinate-system records, and the standard
+    /// fields and extra-bytes descriptors of its dimensions, so that columns named as its
+    /// dimensions go back where they came from. Ignored for other formats.
+    pub las: Option<&'a LasTemplate>,
 }
 
 /// Writes `columns` to `path` in the format its extension names (case-insensitive): `.ply`
@@ -158,12 +196,36 @@ pub fn write_point_cloud_as(
     columns: &[Column<'_>],
     ply_format: PlyFormat,
 ) -> Result<(), WriteError> {
+    let options = WriteOptions {
+        ply_format,
+        las: None,
+    };
+    write_point_cloud_as_with(path, format, columns, &options)
+}
+
+/// Writes `columns` to `path` in the given format, atomically, as [`write_point_cloud_as`]
+/// does, with options.
+///
+/// # Errors
+/// Those of [`write_point_cloud_as`].
+pub fn write_point_cloud_as_with(
+    path: &Path,
+    format: FileFormat,
+    columns: &[Column<'_>],
+    options: &WriteOptions<'_>,
+) -> Result<(), WriteError> {
     match format {
-        FileFormat::Ply => write_ply(path, columns, ply_format),
+        FileFormat::Ply => write_ply(path, columns, options.ply_format),
         FileFormat::Csv => write_csv(path, columns),
         FileFormat::Xyz => write_xyz(path, columns),
-        FileFormat::Las => write_las(path, columns, false),
-        FileFormat::Laz => write_las(path, columns, true),
+        FileFormat::Las | FileFormat::Laz => {
+            let file = path.display().to_string();
+            validate(&file, columns)?;
+            let compressed = format == FileFormat::Laz;
+            write_atomically(path, |out| {
+                crate::las::write_file(out, &file, columns, compressed, options.las)
+            })
+        }
     }
 }
 
@@ -179,12 +241,31 @@ pub fn write_point_cloud_to(
     columns: &[Column<'_>],
     ply_format: PlyFormat,
 ) -> Result<(), WriteError> {
+    let options = WriteOptions {
+        ply_format,
+        las: None,
+    };
+    write_point_cloud_to_with(writer, name, format, columns, &options)
+}
+
+/// Writes `columns` in the given format to a stream, as [`write_point_cloud_to`] does, with
+/// options.
+///
+/// # Errors
+/// Those of [`write_point_cloud_to`].
+pub fn write_point_cloud_to_with(
+    writer: impl Write,
+    name: &str,
+    format: FileFormat,
+    columns: &[Column<'_>],
+    options: &WriteOptions<'_>,
+) -> Result<(), WriteError> {
     match format {
-        FileFormat::Ply => write_ply_to(writer, name, columns, ply_format),
+        FileFormat::Ply => write_ply_to(writer, name, columns, options.ply_format),
         FileFormat::Csv => write_csv_to(writer, name, columns),
         FileFormat::Xyz => write_xyz_to(writer, name, columns),
-        FileFormat::Las => crate::las::write_stream(writer, name, columns, false),
-        FileFormat::Laz => crate::las::write_stream(writer, name, columns, true),
+        FileFormat::Las => crate::las::write_stream(writer, name, columns, false, options.las),
+        FileFormat::Laz => crate::las::write_stream(writer, name, columns, true, options.las),
     }
 }
 
@@ -246,7 +327,7 @@ pub fn write_las(path: &Path, columns: &[Column<'_>], compressed: bool) -> Resul
     let file = path.display().to_string();
     validate(&file, columns)?;
     write_atomically(path, |out| {
-        crate::las::write_file(out, &file, columns, compressed)
+        crate::las::write_file(out, &file, columns, compressed, None)
     })
 }
 
@@ -428,29 +509,28 @@ fn resolve_links(path: &Path) -> io::Result<PathBuf> {
     Ok(path)
 }
 
-/// One value from a column.
-#[derive(Clone, Copy, Debug)]
-enum Value {
-    F64(f64),
-    I32(i32),
-}
-
 /// Walks one column row by row, so rows can be written without indexing.
 #[derive(Debug)]
 enum Cursor<'a> {
     F64(slice::Iter<'a, f64>),
     I32(slice::Iter<'a, i32>),
     Component(slice::Iter<'a, [f64; 3]>, Axis),
+    Attribute(&'a AttributeData, usize),
 }
 
 impl Iterator for Cursor<'_> {
-    type Item = Value;
+    type Item = Scalar;
 
-    fn next(&mut self) -> Option<Value> {
+    fn next(&mut self) -> Option<Scalar> {
         match self {
-            Self::F64(iter) => iter.next().map(|&v| Value::F64(v)),
-            Self::I32(iter) => iter.next().map(|&v| Value::I32(v)),
-            Self::Component(iter, axis) => iter.next().map(|v| Value::F64(axis.of(v))),
+            Self::F64(iter) => iter.next().map(|&v| Scalar::F64(v)),
+            Self::I32(iter) => iter.next().map(|&v| Scalar::I32(v)),
+            Self::Component(iter, axis) => iter.next().map(|v| Scalar::F64(axis.of(v))),
+            Self::Attribute(data, next) => {
+                let value = data.get(*next)?;
+                *next += 1;
+                Some(value)
+            }
         }
     }
 }
@@ -471,11 +551,12 @@ fn write_ply_rows(
     // Writing to a String cannot fail.
     let _ = writeln!(header, "element vertex {rows}");
     for column in columns {
-        let ty = match column.data {
-            ColumnData::I32(_) => "int",
-            ColumnData::F64(_) | ColumnData::Component { .. } => "double",
-        };
-        let _ = writeln!(header, "property {ty} {}", column.name);
+        let _ = writeln!(
+            header,
+            "property {} {}",
+            column.data.ply_type(),
+            column.name
+        );
     }
     header.push_str("end_header\n");
     out.write_all(header.as_bytes()).map_err(io_error(file))?;
@@ -496,10 +577,7 @@ fn write_binary_rows(
     for _ in 0..rows {
         row.clear();
         for value in cursors.iter_mut().filter_map(Iterator::next) {
-            match value {
-                Value::F64(v) => row.extend_from_slice(&v.to_le_bytes()),
-                Value::I32(v) => row.extend_from_slice(&v.to_le_bytes()),
-            }
+            value.push_ply(&mut row);
         }
         out.write_all(&row).map_err(io_error(file))?;
     }
@@ -543,13 +621,9 @@ fn write_text_rows(
             if index > 0 {
                 row.push(separator);
             }
-            // `{:?}` gives the shortest decimal that parses back to the same f64, switching
-            // to exponent form for very large or small magnitudes. Writing to a String cannot
-            // fail.
-            let _ = match value {
-                Value::F64(v) => write!(row, "{v:?}"),
-                Value::I32(v) => write!(row, "{v}"),
-            };
+            // Floats as the shortest decimal that parses back to the same value, switching
+            // to exponent form for very large or small magnitudes.
+            value.push_text(&mut row);
         }
         row.push('\n');
         out.write_all(row.as_bytes()).map_err(io_error(file))?;

@@ -2,8 +2,8 @@
 
 use std::io::{self, BufRead, Read};
 
-use super::capacity;
 use super::header::{Element, Encoding, Property, PropertyKind, ScalarType, describe, io_error};
+use super::{Target, attribute_columns, capacity};
 use crate::error::ReadError;
 use crate::{CloudBuilder, PointCloud};
 
@@ -58,22 +58,32 @@ impl<R: BufRead> BinaryBody<'_, R> {
         Ok(())
     }
 
+    /// Reads the bytes of one scalar into the start of an 8-byte buffer, or reports it as
+    /// truncated.
+    fn read_raw(
+        &mut self,
+        ty: ScalarType,
+        field: impl FnOnce() -> String,
+    ) -> Result<[u8; 8], ReadError> {
+        let mut buf = [0; 8];
+        let bytes = buf.get_mut(..ty.size() as usize).unwrap_or_default();
+        let read = read_full(&mut self.reader, bytes).map_err(io_error(self.file))?;
+        if read < bytes.len() {
+            return Err(self.truncated(self.offset, field()));
+        }
+        self.offset = self.offset.saturating_add(ty.size());
+        Ok(buf)
+    }
+
     /// Reads one scalar, or reports it as truncated.
     fn read_scalar(
         &mut self,
         ty: ScalarType,
         field: impl FnOnce() -> String,
     ) -> Result<f64, ReadError> {
-        let mut buf = [0; 8];
-        let bytes = buf.get_mut(..ty.size() as usize).unwrap_or_default();
-        let read = read_full(&mut self.reader, bytes).map_err(io_error(self.file))?;
-        match ty.decode(bytes, self.encoding) {
-            Some(value) if read == bytes.len() => {
-                self.offset = self.offset.saturating_add(ty.size());
-                Ok(value)
-            }
-            _ => Err(self.truncated(self.offset, field())),
-        }
+        let raw = self.read_raw(ty, field)?;
+        // The buffer holds 8 bytes, enough for any type.
+        Ok(ty.decode(&raw, self.encoding).unwrap_or(f64::NAN))
     }
 
     /// Reads a list length, which must not be negative.
@@ -184,7 +194,7 @@ impl<R: BufRead> BinaryBody<'_, R> {
     pub(super) fn read_vertices(
         &mut self,
         vertex: &Element,
-        targets: &[Option<usize>],
+        targets: &[Target],
         has_normals: bool,
         remaining: Option<u64>,
     ) -> Result<PointCloud, ReadError> {
@@ -196,8 +206,9 @@ impl<R: BufRead> BinaryBody<'_, R> {
                 PropertyKind::List { count, .. } => count.size(),
             })
             .sum();
-        let mut cloud =
-            CloudBuilder::new(has_normals, capacity(vertex.count, min_record, remaining));
+        let capacity = capacity(vertex.count, min_record, remaining);
+        let mut cloud = CloudBuilder::new(has_normals, capacity);
+        cloud.attributes = attribute_columns(vertex, targets, capacity);
         match vertex.fixed_size() {
             Some(size) => self.read_fixed_vertices(vertex, size, targets, &mut cloud)?,
             None => self.read_variable_vertices(vertex, targets, &mut cloud)?,
@@ -220,20 +231,25 @@ impl<R: BufRead> BinaryBody<'_, R> {
         &mut self,
         vertex: &Element,
         size: u64,
-        targets: &[Option<usize>],
+        targets: &[Target],
         cloud: &mut CloudBuilder,
     ) -> Result<(), ReadError> {
-        // (offset in record, type, slot, property) for each property that is kept.
+        // (offset in record, type, slot, property) for the coordinates and normals, and
+        // (offset in record, attribute) for the attributes.
         let mut plan = Vec::with_capacity(6);
+        let mut attributes = Vec::with_capacity(cloud.attributes.len());
         let mut at = 0;
         for (property, target) in vertex.properties.iter().zip(targets) {
             if let PropertyKind::Scalar(ty) = property.kind {
-                if let Some(slot) = *target {
-                    plan.push((at, ty, slot, property));
+                match *target {
+                    Target::Slot(slot) => plan.push((at, ty, slot, property)),
+                    Target::Attribute(i) => attributes.push((usize::try_from(at).ok(), i)),
+                    Target::Skip => {}
                 }
                 at += ty.size();
             }
         }
+        let big_endian = self.encoding == Encoding::BigEndian;
         let mut record = vec![0; usize::try_from(size).unwrap_or(0)];
         for index in 0..vertex.count {
             let read = read_full(&mut self.reader, &mut record).map_err(io_error(self.file))?;
@@ -258,6 +274,13 @@ impl<R: BufRead> BinaryBody<'_, R> {
                     *dst = value;
                 }
             }
+            for &(at, i) in &attributes {
+                let bytes = at.and_then(|at| record.get(at..)).unwrap_or_default();
+                if let Some(a) = cloud.attributes.get_mut(i) {
+                    // The record holds every property whole: this cannot come up short.
+                    a.data.push_bytes(bytes, big_endian);
+                }
+            }
             cloud.push(values);
             self.offset = self.offset.saturating_add(size);
         }
@@ -268,9 +291,10 @@ impl<R: BufRead> BinaryBody<'_, R> {
     fn read_variable_vertices(
         &mut self,
         vertex: &Element,
-        targets: &[Option<usize>],
+        targets: &[Target],
         cloud: &mut CloudBuilder,
     ) -> Result<(), ReadError> {
+        let big_endian = self.encoding == Encoding::BigEndian;
         for index in 0..vertex.count {
             let mut values = [0.0; 6];
             for (property, target) in vertex.properties.iter().zip(targets) {
@@ -278,12 +302,23 @@ impl<R: BufRead> BinaryBody<'_, R> {
                     PropertyKind::Scalar(ty) => {
                         let field = || describe(vertex, index, property, ty.name());
                         let offset = self.offset;
-                        let value = self.read_scalar(ty, field)?;
-                        if let Some(dst) = target.and_then(|slot| values.get_mut(slot)) {
-                            if !value.is_finite() {
-                                return Err(self.non_finite(offset, field(), value));
+                        let raw = self.read_raw(ty, field)?;
+                        match *target {
+                            Target::Slot(slot) => {
+                                let value = ty.decode(&raw, self.encoding).unwrap_or(f64::NAN);
+                                if !value.is_finite() {
+                                    return Err(self.non_finite(offset, field(), value));
+                                }
+                                if let Some(dst) = values.get_mut(slot) {
+                                    *dst = value;
+                                }
                             }
-                            *dst = value;
+                            Target::Attribute(i) => {
+                                if let Some(a) = cloud.attributes.get_mut(i) {
+                                    a.data.push_bytes(&raw, big_endian);
+                                }
+                            }
+                            Target::Skip => {}
                         }
                     }
                     PropertyKind::List { count, item } => {

@@ -3,6 +3,7 @@
 use std::collections::HashSet;
 use std::io::{self, BufRead, Read};
 
+use crate::attributes::AttributeType;
 use crate::error::{ReadError, quoted};
 use crate::lines::strip_line_ending;
 
@@ -67,6 +68,20 @@ impl ScalarType {
             Self::U32 => "uint32",
             Self::F32 => "float32",
             Self::F64 => "float64",
+        }
+    }
+
+    /// The attribute type holding its values exactly.
+    pub(super) const fn attribute_type(self) -> AttributeType {
+        match self {
+            Self::I8 => AttributeType::I8,
+            Self::U8 => AttributeType::U8,
+            Self::I16 => AttributeType::I16,
+            Self::U16 => AttributeType::U16,
+            Self::I32 => AttributeType::I32,
+            Self::U32 => AttributeType::U32,
+            Self::F32 => AttributeType::F32,
+            Self::F64 => AttributeType::F64,
         }
     }
 

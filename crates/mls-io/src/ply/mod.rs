@@ -4,28 +4,41 @@
 //! The maintained PLY crates were measured and not used: `ply-rs-bw` stores each vertex as a
 //! map of properties by default (1.06 s and 800 MB for a million vertices), and its typed
 //! interface, though fast, reports neither byte offsets nor property names in its errors and
-//! can panic on some inputs. Reading only x, y, z and nx, ny, nz needs little code.
+//! can panic on some inputs. Reading the vertex properties, each in its own type, needs little
+//! code.
 
 mod binary;
 mod header;
 
 use std::io::BufRead;
 
+use crate::attributes::{Attribute, AttributeData};
 use crate::error::{ReadError, quoted};
 use crate::lines::{Lines, parse_finite};
-use crate::{CloudBuilder, PointCloud, SLOT_NAMES};
+use crate::{CloudBuilder, PointCloud, ReadOutcome, SLOT_NAMES};
 use binary::BinaryBody;
 use header::{Element, Encoding, Header, Property, PropertyKind, no_vertex_element, parse_header};
+
+/// Where a vertex property's values go.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Target {
+    /// A slot of [`SLOT_NAMES`].
+    Slot(usize),
+    /// An attribute, by index in the cloud's attributes.
+    Attribute(usize),
+    /// Nowhere: a list property.
+    Skip,
+}
 
 /// Reads a PLY stream; `size_hint` is the total file size when known, to bound preallocation.
 pub(crate) fn read(
     mut reader: impl BufRead,
     file: &str,
     size_hint: Option<u64>,
-) -> Result<PointCloud, ReadError> {
+) -> Result<ReadOutcome, ReadError> {
     let header = parse_header(&mut reader, file)?;
-    let (vertex_index, targets) = vertex_layout(&header, file)?;
-    let has_normals = targets.iter().flatten().any(|&slot| slot >= 3);
+    let (vertex_index, targets, notes) = vertex_layout(&header, file)?;
+    let has_normals = targets.contains(&Target::Slot(3));
     let remaining = size_hint.map(|size| size.saturating_sub(header.bytes));
     let mut elements = header.elements.iter();
     // The elements before the vertex element are skipped; those after it are never read, as
@@ -41,6 +54,7 @@ pub(crate) fn read(
                 return Err(no_vertex_element(file, &header));
             };
             read_ascii_vertices(&mut lines, file, vertex, &targets, has_normals, remaining)
+                .map(|cloud| ReadOutcome { cloud, notes })
         }
         Encoding::LittleEndian | Encoding::BigEndian => {
             let mut body = BinaryBody {
@@ -56,13 +70,17 @@ pub(crate) fn read(
                 return Err(no_vertex_element(file, &header));
             };
             body.read_vertices(vertex, &targets, has_normals, remaining)
+                .map(|cloud| ReadOutcome { cloud, notes })
         }
     }
 }
 
-/// Finds the vertex element and maps each of its properties to a slot of [`SLOT_NAMES`] (or
-/// `None` to skip it).
-fn vertex_layout(header: &Header, file: &str) -> Result<(usize, Vec<Option<usize>>), ReadError> {
+/// Finds the vertex element and maps each of its properties to a slot of [`SLOT_NAMES`] or
+/// to an attribute, in property order; list properties are skipped, with a note each.
+fn vertex_layout(
+    header: &Header,
+    file: &str,
+) -> Result<(usize, Vec<Target>, Vec<String>), ReadError> {
     let Some((index, vertex)) = header
         .elements
         .iter()
@@ -72,6 +90,8 @@ fn vertex_layout(header: &Header, file: &str) -> Result<(usize, Vec<Option<usize
         return Err(no_vertex_element(file, header));
     };
     let mut targets = Vec::with_capacity(vertex.properties.len());
+    let mut notes = Vec::new();
+    let mut attributes = 0;
     let mut present = [false; 6];
     for property in &vertex.properties {
         let slot = SLOT_NAMES.iter().position(|&n| n == property.name);
@@ -88,7 +108,20 @@ fn vertex_layout(header: &Header, file: &str) -> Result<(usize, Vec<Option<usize
         if let Some(flag) = slot.and_then(|s| present.get_mut(s)) {
             *flag = true;
         }
-        targets.push(slot);
+        targets.push(match (slot, property.kind) {
+            (Some(slot), _) => Target::Slot(slot),
+            (None, PropertyKind::Scalar(_)) => {
+                attributes += 1;
+                Target::Attribute(attributes - 1)
+            }
+            (None, PropertyKind::List { .. }) => {
+                notes.push(format!(
+                    "{file}: vertex property {} is a list; it is not carried to the output",
+                    property.name
+                ));
+                Target::Skip
+            }
+        });
     }
     let [x, y, z, nx, ny, nz] = present;
     for (found, field) in [(x, "x"), (y, "y"), (z, "z")] {
@@ -101,7 +134,24 @@ fn vertex_layout(header: &Header, file: &str) -> Result<(usize, Vec<Option<usize
         }
     }
     check_normals(file, vertex.line, [nx, ny, nz])?;
-    Ok((index, targets))
+    Ok((index, targets, notes))
+}
+
+/// The empty attribute columns of the vertex element's scalar properties that are not
+/// coordinates or normals, in property order, with room for `capacity` values.
+fn attribute_columns(vertex: &Element, targets: &[Target], capacity: usize) -> Vec<Attribute> {
+    vertex
+        .properties
+        .iter()
+        .zip(targets)
+        .filter_map(|(p, t)| match (t, p.kind) {
+            (Target::Attribute(_), PropertyKind::Scalar(ty)) => Some(Attribute {
+                name: p.name.clone(),
+                data: AttributeData::with_capacity(ty.attribute_type(), capacity),
+            }),
+            _ => None,
+        })
+        .collect()
 }
 
 /// Accepts all three normal components or none; otherwise names the missing ones.
@@ -167,13 +217,15 @@ fn read_ascii_vertices<R: BufRead>(
     lines: &mut Lines<R>,
     file: &str,
     vertex: &Element,
-    targets: &[Option<usize>],
+    targets: &[Target],
     has_normals: bool,
     remaining: Option<u64>,
 ) -> Result<PointCloud, ReadError> {
     // An ASCII vertex takes at least two bytes per property (a digit and a separator).
     let min_record = 2 * vertex.properties.len() as u64;
-    let mut cloud = CloudBuilder::new(has_normals, capacity(vertex.count, min_record, remaining));
+    let capacity = capacity(vertex.count, min_record, remaining);
+    let mut cloud = CloudBuilder::new(has_normals, capacity);
+    cloud.attributes = attribute_columns(vertex, targets, capacity);
     for index in 0..vertex.count {
         let Some((line, text)) = lines.next_line(file)? else {
             return Err(ascii_eof(lines, file, vertex, index));
@@ -191,11 +243,19 @@ fn read_ascii_vertices<R: BufRead>(
                 return Err(error(property, "missing value (row too short)".to_owned()));
             };
             match property.kind {
-                PropertyKind::Scalar(_) => {
-                    if let Some(value) = target.and_then(|slot| values.get_mut(slot)) {
-                        *value = parse_finite(token).map_err(|m| error(property, m))?;
+                PropertyKind::Scalar(_) => match *target {
+                    Target::Slot(slot) => {
+                        if let Some(value) = values.get_mut(slot) {
+                            *value = parse_finite(token).map_err(|m| error(property, m))?;
+                        }
                     }
-                }
+                    Target::Attribute(i) => {
+                        if let Some(a) = cloud.attributes.get_mut(i) {
+                            a.data.push_text(token).map_err(|m| error(property, m))?;
+                        }
+                    }
+                    Target::Skip => {}
+                },
                 PropertyKind::List { .. } => {
                     let length = token.parse::<u64>().map_err(|_| {
                         error(property, format!("invalid list length {}", quoted(token)))
