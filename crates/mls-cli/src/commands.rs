@@ -109,6 +109,7 @@ pub fn curvature(a: CurvatureArgs) -> Result<()> {
             normals_source,
             normals_from_file,
             surface,
+            carried,
         } = pipeline::prepare(
             &a.input,
             a.out.formats.input_format,
@@ -220,7 +221,12 @@ pub fn curvature(a: CurvatureArgs) -> Result<()> {
             columns.push(Column::f64("k2_sd", &out.k2_sd));
         }
         columns.push(Column::i32("status", &out.status));
-        t.time("write", || output.write(&columns, a.out.ascii))?;
+        let mut carried = keep(carried, &a.out);
+        carried.rename_clashes(&columns, &a.input);
+        let columns = carried.insert(columns, 6);
+        t.time("write", || {
+            output.write(&columns, a.out.ascii, carried.las.as_ref())
+        })?;
         if !s.run.quiet {
             eprintln!("mlscurv curvature: {}", pipeline::input_name(&a.input));
             eprintln!("  points read     {n}");
@@ -275,6 +281,11 @@ pub fn curvature(a: CurvatureArgs) -> Result<()> {
         }
         Ok(())
     })
+}
+
+/// What the input carries to the output, unless `--no-attributes`.
+fn keep(carried: pipeline::Carried, out: &crate::OutputArgs) -> pipeline::Carried {
+    pipeline::Carried::new(carried.attributes, carried.las, !out.no_attributes)
 }
 
 /// The options that set h, for the summaries.
@@ -437,7 +448,8 @@ fn eval_with(a: &EvalArgs, output: &pipeline::Output) -> Result<()> {
         .map(|(name, c)| Column::f64(name, c))
         .collect();
     columns.push(Column::i32("status", &status));
-    t.time("write", || output.write(&columns, false))?;
+    // Attributes belong to the cloud's points, not to the queries.
+    t.time("write", || output.write(&columns, false, None))?;
     if !a.run.quiet {
         eprintln!("mlscurv eval: {cloud_name}");
         eprintln!("  points read     {}", points.len());
@@ -460,9 +472,14 @@ pub fn normals(a: NormalsArgs) -> Result<()> {
     pipeline::with_threads(a.run.threads, || {
         let mut t = Timings::default();
         let par = Parallelism::Rayon;
-        let cloud = t.time("read", || {
+        let mut cloud = t.time("read", || {
             pipeline::read(&a.input, a.out.formats.input_format, a.columns.as_ref())
         })?;
+        let mut carried = pipeline::Carried::new(
+            std::mem::take(&mut cloud.attributes),
+            cloud.las.take(),
+            !a.out.no_attributes,
+        );
         let points = pipeline::to_points(&cloud);
         let scale = t.time("spacing", || {
             pipeline::choose_h(&points, a.scale.h, a.scale.h_factor, par, &a.input)
@@ -503,7 +520,11 @@ pub fn normals(a: NormalsArgs) -> Result<()> {
         if output.format() != mls_io::FileFormat::Xyz {
             columns.push(Column::i32("status", &status));
         }
-        t.time("write", || output.write(&columns, a.out.ascii))?;
+        carried.rename_clashes(&columns, &a.input);
+        let columns = carried.insert(columns, 6);
+        t.time("write", || {
+            output.write(&columns, a.out.ascii, carried.las.as_ref())
+        })?;
         if !a.run.quiet {
             eprintln!("mlscurv normals: {}", pipeline::input_name(&a.input));
             eprintln!("  points read     {}", points.len());
@@ -531,6 +552,7 @@ pub fn project(a: ProjectArgs) -> Result<()> {
             scale,
             normals_source,
             surface,
+            carried,
             ..
         } = pipeline::prepare(
             &a.input,
@@ -568,7 +590,12 @@ pub fn project(a: ProjectArgs) -> Result<()> {
         columns.extend(vector_columns(["x", "y", "z"], &pos));
         columns.extend(vector_columns(["nx", "ny", "nz"], &nrm));
         columns.push(Column::i32("status", &status));
-        t.time("write", || output.write(&columns, a.out.ascii))?;
+        let mut carried = keep(carried, &a.out);
+        carried.rename_clashes(&columns, &a.input);
+        let columns = carried.insert(columns, 6);
+        t.time("write", || {
+            output.write(&columns, a.out.ascii, carried.las.as_ref())
+        })?;
         if !s.run.quiet {
             eprintln!("mlscurv project: {}", pipeline::input_name(&a.input));
             eprintln!("  points read     {n}");
@@ -666,6 +693,18 @@ fn info_report(a: &InfoArgs, out: &mut String) -> Result<()> {
             };
             println!("normals         present, {zero} zero or invalid; {verdict}");
         }
+    }
+    if !cloud.attributes.is_empty() {
+        let list: Vec<String> = cloud
+            .attributes
+            .iter()
+            .map(|a| format!("{} ({})", a.name, a.data.ty().name()))
+            .collect();
+        println!(
+            "attributes      {} (carried to the output): {}",
+            list.len(),
+            list.join(", ")
+        );
     }
     Ok(())
 }

@@ -13,7 +13,7 @@ use mls_core::{
     AdaptiveSurface, ConfigError, Cutoff, MlsConfig, MlsSurface, Parallelism, Point, PointStatus,
     Vector,
 };
-use mls_io::{Column, FileFormat, PlyFormat, PointCloud, ReadError};
+use mls_io::{Attribute, Column, FileFormat, LasTemplate, PlyFormat, PointCloud, ReadError};
 
 use crate::{Format, NormalsMode, OutputArgs, SurfaceArgs};
 
@@ -186,24 +186,33 @@ impl Output {
         }
     }
 
-    /// Writes the table; PLY in binary little endian unless `ascii`.
-    pub fn write(&self, columns: &[Column<'_>], ascii: bool) -> Result<()> {
-        let ply = if ascii {
-            PlyFormat::Ascii
-        } else {
-            PlyFormat::BinaryLittleEndian
+    /// Writes the table; PLY in binary little endian unless `ascii`; LAS in the layout of
+    /// the LAS input `las`, if given.
+    pub fn write(
+        &self,
+        columns: &[Column<'_>],
+        ascii: bool,
+        las: Option<&LasTemplate>,
+    ) -> Result<()> {
+        let options = mls_io::WriteOptions {
+            ply_format: if ascii {
+                PlyFormat::Ascii
+            } else {
+                PlyFormat::BinaryLittleEndian
+            },
+            las,
         };
         match self {
             Self::File(path, format) => {
-                mls_io::write_point_cloud_as(path, *format, columns, ply)?;
+                mls_io::write_point_cloud_as_with(path, *format, columns, &options)?;
             }
             Self::Stdout(format) => {
-                let written = mls_io::write_point_cloud_to(
+                let written = mls_io::write_point_cloud_to_with(
                     std::io::stdout().lock(),
                     STDOUT_NAME,
                     *format,
                     columns,
-                    ply,
+                    &options,
                 );
                 match written {
                     Err(mls_io::WriteError::Io { error, .. })
@@ -601,6 +610,47 @@ pub fn normals(
     })
 }
 
+/// What an input carries to the output of a command beside its geometry: its attributes
+/// (colour, intensity, LAS dimensions …) and, for a LAS input, its layout.
+#[derive(Debug, Default)]
+pub struct Carried {
+    pub attributes: Vec<Attribute>,
+    pub las: Option<LasTemplate>,
+}
+
+impl Carried {
+    /// What `cloud` carries, or nothing with `--no-attributes` (`keep` false).
+    pub fn new(attributes: Vec<Attribute>, las: Option<LasTemplate>, keep: bool) -> Self {
+        if keep {
+            Self { attributes, las }
+        } else {
+            Self::default()
+        }
+    }
+
+    /// Renames the attributes whose names the output's own `columns` have (`k1` → `k1_in`),
+    /// with a note on stderr for each, even with --quiet: a script reading the output by name
+    /// needs to know.
+    pub fn rename_clashes(&mut self, columns: &[Column<'_>], input: &Path) {
+        let reserved: Vec<&str> = columns.iter().map(|c| c.name).collect();
+        for (old, new) in mls_io::rename_clashes(&mut self.attributes, &reserved) {
+            eprintln!(
+                "mlscurv: note: {}: attribute `{old}` is written as `{new}`: the output has a \
+                 column `{old}` of its own",
+                input_name(input)
+            );
+        }
+    }
+
+    /// `columns` with the attributes after the first `after` (the geometry); call
+    /// [`Self::rename_clashes`] with the same columns first.
+    pub fn insert<'a>(&'a self, mut columns: Vec<Column<'a>>, after: usize) -> Vec<Column<'a>> {
+        let at = after.min(columns.len());
+        columns.splice(at..at, self.attributes.iter().map(Column::attribute));
+        columns
+    }
+}
+
 /// Everything a command needs before evaluating: the points, h, where the normals came from,
 /// and the surface. The file's normals and the oriented normals are not kept: the surface holds
 /// its own copy, and a cloud's worth of memory counts at a million points.
@@ -613,6 +663,9 @@ pub struct Prepared<S = MlsSurface> {
     /// Whether the normals are the file's.
     pub normals_from_file: bool,
     pub surface: S,
+    /// The input's attributes and LAS layout (all of them: the command drops them for
+    /// `--no-attributes`).
+    pub carried: Carried,
 }
 
 /// The surface `mlscurv curvature` evaluates: one scale, or a per-point scale (`--adaptive`).
@@ -651,6 +704,8 @@ pub fn prepare<S>(
     let PointCloud {
         points,
         normals: file_normals,
+        attributes,
+        las,
     } = t.time("read", || read(input, format, s.columns.as_ref()))?;
     // `[f64; 3]` and `Point` have the same layout: the conversion reuses the buffer.
     let points: Vec<Point> = points.into_iter().map(Point::from).collect();
@@ -682,6 +737,7 @@ pub fn prepare<S>(
         normals_source: source,
         normals_from_file: from_file,
         surface,
+        carried: Carried::new(attributes, las, true),
     })
 }
 
