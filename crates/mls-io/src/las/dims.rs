@@ -170,10 +170,10 @@ mod tests {
             assert_eq!(end, len - waveform, "format {format}");
             let mut bits_used = vec![0u8; len];
             for f in &fields {
-                for at in f.at..f.at + f.ty.size() {
-                    let mask = f.bits.map_or(0xFF, |(s, m)| m << s);
-                    assert_eq!(bits_used[at] & mask, 0, "format {format} {}", f.name);
-                    bits_used[at] |= mask;
+                let mask = f.bits.map_or(0xFF, |(s, m)| m << s);
+                for used in &mut bits_used[f.at..f.at + f.ty.size()] {
+                    assert_eq!(*used & mask, 0, "format {format} {}", f.name);
+                    *used |= mask;
                 }
             }
         }

@@ -229,17 +229,17 @@ fn las_point(format: u8, i: usize) -> Point {
         intensity: (i * 257 % 65536) as u16,
         return_number: (i % 3 + 1) as u8,
         number_of_returns: 3,
-        scan_direction: if i % 2 == 0 {
+        scan_direction: if i.is_multiple_of(2) {
             ScanDirection::LeftToRight
         } else {
             ScanDirection::RightToLeft
         },
-        is_edge_of_flight_line: i % 5 == 0,
+        is_edge_of_flight_line: i.is_multiple_of(5),
         classification: Classification::new((i % 10) as u8).unwrap(),
-        is_synthetic: i % 7 == 0,
-        is_key_point: i % 11 == 0,
-        is_withheld: i % 13 == 0,
-        is_overlap: extended && i % 17 == 0,
+        is_synthetic: i.is_multiple_of(7),
+        is_key_point: i.is_multiple_of(11),
+        is_withheld: i.is_multiple_of(13),
+        is_overlap: extended && i.is_multiple_of(17),
         scanner_channel: if extended { (i % 4) as u8 } else { 0 },
         scan_angle: if extended { -12.0 } else { 12.0 },
         user_data: (i % 256) as u8,
