@@ -5,6 +5,8 @@
 //! is flushed, synced and then renamed over the destination. On any error the temporary file
 //! is removed and the destination is untouched.
 
+mod rows;
+
 use std::fs::File;
 use std::io::{self, BufWriter, Write};
 use std::path::{Path, PathBuf};
@@ -15,8 +17,6 @@ use crate::attributes::{Attribute, AttributeData};
 use crate::error::WriteError;
 use crate::las::LasTemplate;
 use crate::{FileFormat, detect_format};
-
-mod rows;
 
 /// Size of the output buffer: large enough that a million rows take few system calls.
 const BUFFER_BYTES: usize = 1 << 20;
