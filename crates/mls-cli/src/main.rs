@@ -9,6 +9,8 @@ use clap::{ArgAction, Args, CommandFactory as _, FromArgMatches as _, Subcommand
 use mls_core::PointStatus;
 
 mod commands;
+mod info;
+mod output;
 mod pipeline;
 mod progress;
 
@@ -421,7 +423,7 @@ fn main() -> ExitCode {
         Command::Eval(a) => commands::eval(a),
         Command::Normals(a) => commands::normals(a),
         Command::Project(a) => commands::project(a),
-        Command::Info(a) => commands::info(a),
+        Command::Info(a) => info::info(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
