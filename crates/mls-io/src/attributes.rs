@@ -107,7 +107,10 @@ impl AttributeType {
 }
 
 /// One attribute's values, one per point, in file order.
-#[derive(Clone, Debug, PartialEq)]
+///
+/// Equality compares values as data: floats bit for bit (so `-0.0` differs from `0.0`), except
+/// that any NaN equals any NaN (text keeps neither a NaN's sign nor its payload).
+#[derive(Clone, Debug)]
 #[allow(missing_docs)]
 pub enum AttributeData {
     I8(Vec<i8>),
@@ -138,6 +141,31 @@ macro_rules! each {
             AttributeData::F64($v) => $body,
         }
     };
+}
+
+impl PartialEq for AttributeData {
+    fn eq(&self, other: &Self) -> bool {
+        fn floats<T: Copy>(a: &[T], b: &[T], same: impl Fn(T, T) -> bool) -> bool {
+            a.len() == b.len() && a.iter().zip(b).all(|(&x, &y)| same(x, y))
+        }
+        match (self, other) {
+            (Self::I8(a), Self::I8(b)) => a == b,
+            (Self::U8(a), Self::U8(b)) => a == b,
+            (Self::I16(a), Self::I16(b)) => a == b,
+            (Self::U16(a), Self::U16(b)) => a == b,
+            (Self::I32(a), Self::I32(b)) => a == b,
+            (Self::U32(a), Self::U32(b)) => a == b,
+            (Self::I64(a), Self::I64(b)) => a == b,
+            (Self::U64(a), Self::U64(b)) => a == b,
+            (Self::F32(a), Self::F32(b)) => floats(a, b, |x: f32, y: f32| {
+                x.to_bits() == y.to_bits() || (x.is_nan() && y.is_nan())
+            }),
+            (Self::F64(a), Self::F64(b)) => floats(a, b, |x: f64, y: f64| {
+                x.to_bits() == y.to_bits() || (x.is_nan() && y.is_nan())
+            }),
+            _ => false,
+        }
+    }
 }
 
 impl AttributeData {
@@ -373,6 +401,37 @@ pub struct Attribute {
     pub data: AttributeData,
 }
 
+/// `name` as an attribute name every writer can write, unique among `taken`: each character
+/// other than an ASCII letter, digit, `_`, `-` or `.` becomes `_` (an empty name becomes
+/// `fallback`), and a name already taken gets `_2`, `_3` … appended.
+pub(crate) fn usable_name<'t>(
+    name: &str,
+    fallback: &str,
+    taken: impl Iterator<Item = &'t str> + Clone,
+) -> String {
+    let base: String = if name.is_empty() {
+        fallback.to_owned()
+    } else {
+        name.chars()
+            .map(|c| {
+                if c.is_ascii_alphanumeric() || matches!(c, '_' | '-' | '.') {
+                    c
+                } else {
+                    '_'
+                }
+            })
+            .collect()
+    };
+    let is_taken = |n: &str| taken.clone().any(|t| t == n);
+    if !is_taken(&base) {
+        return base;
+    }
+    (2..)
+        .map(|k| format!("{base}_{k}"))
+        .find(|n| !is_taken(n))
+        .unwrap_or(base)
+}
+
 /// Renames attributes whose names are `reserved` (the columns an output computes, such as
 /// `k1` or `status`) or taken by an earlier attribute: `name` becomes `name_in`, or
 /// `name_in2`, `name_in3` … if that is taken too. Returns the renamings, `(old, new)`, in
@@ -485,6 +544,27 @@ mod tests {
         assert_eq!(names, ["k1_in2", "red", "k1_in", "status_in", "red_in"]);
         assert_eq!(renamed.len(), 3);
         assert_eq!(renamed[0], ("k1".to_owned(), "k1_in2".to_owned()));
+    }
+
+    #[test]
+    fn names_are_made_usable_and_unique() {
+        let taken = ["a_b", "x", "x_2"];
+        assert_eq!(usable_name("a/b", "col4", taken.into_iter()), "a_b_2");
+        assert_eq!(
+            usable_name("Echo Width", "c", taken.into_iter()),
+            "Echo_Width"
+        );
+        assert_eq!(usable_name("", "col4", taken.into_iter()), "col4");
+        assert_eq!(usable_name("x", "c", taken.into_iter()), "x_3");
+        assert_eq!(usable_name("é", "c", taken.into_iter()), "_");
+    }
+
+    #[test]
+    fn float_equality_is_bitwise_but_for_nan() {
+        let a = AttributeData::F64(vec![f64::NAN, -0.0]);
+        assert_eq!(a, AttributeData::F64(vec![-f64::NAN, -0.0]));
+        assert_ne!(a, AttributeData::F64(vec![f64::NAN, 0.0]));
+        assert_ne!(AttributeData::F32(vec![1.0]), AttributeData::F64(vec![1.0]));
     }
 
     #[test]

@@ -3,7 +3,7 @@
 use std::borrow::Cow;
 use std::io::BufRead;
 
-use crate::attributes::{Attribute, TextColumn};
+use crate::attributes::{Attribute, TextColumn, usable_name};
 use crate::columns::{ReadOptions, UNIT_TOLERANCE};
 use crate::error::{ReadError, quoted};
 use crate::lines::{Lines, parse_finite};
@@ -329,9 +329,9 @@ pub fn read_xyz_with(
 /// The first non-blank line is the header. Names are matched case-insensitively after
 /// trimming whitespace and surrounding double quotes; `x`, `y`, `z` are required, `nx`, `ny`,
 /// `nz` are optional (all three or none) and any other column is an attribute under its
-/// header name (case kept; `colN` for column `N` when the name is empty, repeated, or has
-/// characters other than ASCII letters, digits, `_`, `-` and `.`), typed as in
-/// [`read_xyz_with`]. Every row must have
+/// header name (case kept; each character other than an ASCII letter, digit, `_`, `-` or `.`
+/// replaced by `_`, `_2`, `_3` … appended to a repeated name, `colN` for an empty name in
+/// column `N`), typed as in [`read_xyz_with`]. Every row must have
 /// as many fields as the header. Fields may be double-quoted (with `""` for a quote inside),
 /// so text columns containing commas are skipped correctly; a quoted field may not span lines.
 /// Blank lines are ignored. A header without rows gives an empty cloud. `name` is the display
@@ -400,18 +400,12 @@ pub fn read_csv_with(
             if column_name == "_" && options.columns.is_some() {
                 continue;
             }
-            // A name the writers cannot write back, or one taken by an earlier column, is
-            // replaced by the column's number.
-            let valid = !column_name.is_empty()
-                && column_name
-                    .bytes()
-                    .all(|b| b.is_ascii_alphanumeric() || matches!(b, b'_' | b'-' | b'.'))
-                && !names[..column].contains(column_name);
-            let name = if valid {
-                column_name.clone()
-            } else {
-                format!("col{}", column + 1)
-            };
+            // A name the writers can write back, and unique.
+            let name = usable_name(
+                column_name,
+                &format!("col{}", column + 1),
+                attributes.0.iter().map(|(n, _, _)| n.as_str()),
+            );
             if let Some(target) = attribute_of.get_mut(column) {
                 *target = Some(attributes.add(name, column + 1));
             }

@@ -6,13 +6,14 @@
 //! from `f64` extra bytes `nx`, `ny`, `nz` (as `mlscurv` writes them), and the header's layout
 //! as a [`LasTemplate`].
 //!
-//! Writing is LAS 1.4. Without a template: point format 6, `x y z` in the records and every
-//! other column as a named extra-bytes attribute of its type (`f64` for float columns, `i32`
-//! for integer ones), described by an Extra Bytes VLR so that PDAL, laspy and CloudCompare
-//! show them as dimensions. With the template of a LAS input: its point format (without
-//! waveform packets), scale, offset, GPS time type, file source id and coordinate-system
-//! records; columns named as its standard dimensions, of the same type, go into their fields,
-//! and its extra-bytes attributes keep their descriptors (options, scale, no-data value,
+//! Writing is LAS 1.4: point format 6 without a template, `x y z` in the records, columns
+//! named as a standard dimension of the format and of its type (a flag only if every value
+//! fits its bits) in that field, and every other column as a named extra-bytes attribute of
+//! its type (`f64` for float columns, `i32` for integer ones), described by an Extra Bytes
+//! VLR so that PDAL, laspy and CloudCompare show them as dimensions. With the template of a
+//! LAS input: its point format (without waveform packets), scale, offset, GPS time type, file
+//! source id and coordinate-system records, so its dimensions go back into their fields, and
+//! its extra-bytes attributes keep their descriptors (options, scale, no-data value,
 //! description).
 //!
 //! Without a template the coordinate scale is the power of ten `10^(floor(log10 E) - 7)`,

@@ -8,7 +8,7 @@ use las::Reader;
 use super::dims::{self, Field};
 use super::extra::{self, ExtraField};
 use super::{LasTemplate, extra::Descriptor};
-use crate::attributes::{Attribute, AttributeData};
+use crate::attributes::{Attribute, AttributeData, usable_name};
 use crate::error::{ReadError, quoted};
 use crate::{MAX_PREALLOCATED, PointCloud, ReadOutcome};
 
@@ -87,10 +87,17 @@ where
                 ty.name()
             )));
         }
+        // A name such as "Echo Width" becomes one every writer can write, and one that a
+        // standard dimension already has gets a number; the descriptor keeps the original.
+        let usable = usable_name(
+            &e.name,
+            "extra",
+            attributes.iter().map(|a: &Attribute| a.name.as_str()),
+        );
         sources.push(Source::Extra(base + e.offset));
-        descriptors.push((e.name.clone(), e.descriptor));
+        descriptors.push((usable.clone(), e.descriptor));
         attributes.push(Attribute {
-            name: e.name.clone(),
+            name: usable,
             data: AttributeData::with_capacity(ty, capacity),
         });
     }

@@ -10,7 +10,7 @@ use las::{Builder, PointDataBuilder, Transform, Vector, Version, Vlr, Writer};
 use super::LasTemplate;
 use super::dims::{self, Field};
 use super::extra::{self, Descriptor, MAX_NAME_BYTES};
-use crate::attributes::Scalar;
+use crate::attributes::{AttributeData, Scalar};
 use crate::error::WriteError;
 use crate::write::{Column, ColumnData, validate};
 
@@ -49,15 +49,14 @@ fn plan<'c, 'a>(
     };
     let xyz = [find("x")?, find("y")?, find("z")?];
     let number = template.map_or(6, |t| t.point_format);
-    // With a template, a column named as a standard field of its format, of the field's type,
-    // goes back into that field; anything else is extra bytes.
+    // A column named as a standard field of the format, of the field's type (and, for a bit
+    // field, with every value within its bits), goes into that field: a LAS input's dimensions
+    // go back where they came from. Anything else is extra bytes.
     let mut standard = Vec::new();
     let mut defaults = Vec::new();
     for f in dims::fields(number) {
         let column = columns.iter().find(|c| {
-            c.name == f.name
-                && matches!(c.data, ColumnData::Attribute(d) if d.ty() == f.ty)
-                && template.is_some()
+            c.name == f.name && matches!(c.data, ColumnData::Attribute(d) if fits(d, &f))
         });
         match column {
             Some(c) => standard.push((f, c)),
@@ -136,6 +135,15 @@ fn plan<'c, 'a>(
         builder,
         rows,
     ))
+}
+
+/// Whether every value of `data` can be stored in field `f` as it is.
+fn fits(data: &AttributeData, f: &Field) -> bool {
+    match (f.bits, data) {
+        (None, data) => data.ty() == f.ty,
+        (Some((_, mask)), AttributeData::U8(values)) => values.iter().all(|&v| v <= mask),
+        (Some(_), _) => false,
+    }
 }
 
 /// The input's descriptor for a column it carried, if the name and type still agree, else a

@@ -12,7 +12,7 @@ mod header;
 
 use std::io::BufRead;
 
-use crate::attributes::{Attribute, AttributeData};
+use crate::attributes::{Attribute, AttributeData, usable_name};
 use crate::error::{ReadError, quoted};
 use crate::lines::{Lines, parse_finite};
 use crate::{CloudBuilder, PointCloud, ReadOutcome, SLOT_NAMES};
@@ -138,20 +138,20 @@ fn vertex_layout(
 }
 
 /// The empty attribute columns of the vertex element's scalar properties that are not
-/// coordinates or normals, in property order, with room for `capacity` values.
+/// coordinates or normals, in property order, with room for `capacity` values; a name the
+/// writers could not write (`scalar/Intensity`) gets `_` for each character they refuse.
 fn attribute_columns(vertex: &Element, targets: &[Target], capacity: usize) -> Vec<Attribute> {
-    vertex
-        .properties
-        .iter()
-        .zip(targets)
-        .filter_map(|(p, t)| match (t, p.kind) {
-            (Target::Attribute(_), PropertyKind::Scalar(ty)) => Some(Attribute {
-                name: p.name.clone(),
+    let mut attributes: Vec<Attribute> = Vec::new();
+    for (p, t) in vertex.properties.iter().zip(targets) {
+        if let (Target::Attribute(_), PropertyKind::Scalar(ty)) = (t, p.kind) {
+            let taken = attributes.iter().map(|a| a.name.as_str());
+            attributes.push(Attribute {
+                name: usable_name(&p.name, "property", taken),
                 data: AttributeData::with_capacity(ty.attribute_type(), capacity),
-            }),
-            _ => None,
-        })
-        .collect()
+            });
+        }
+    }
+    attributes
 }
 
 /// Accepts all three normal components or none; otherwise names the missing ones.

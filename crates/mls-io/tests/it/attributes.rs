@@ -7,8 +7,9 @@ use std::fmt::Write as _;
 use las::point::{Classification, Format, ScanDirection};
 use las::{Builder, Color, Point, Reader, Transform, Vector, Version, Vlr, Writer};
 use mls_io::{
-    Attribute, AttributeData, FileFormat, PlyFormat, WriteOptions, read_csv_with, read_ply,
-    read_point_cloud_from_with, write_ply_to, write_point_cloud, write_point_cloud_as_with,
+    Attribute, AttributeData, Axis, Column, FileFormat, PlyFormat, WriteOptions, read_csv_with,
+    read_ply, read_point_cloud_from_with, write_ply_to, write_point_cloud,
+    write_point_cloud_as_with,
 };
 
 use crate::{Body, assert_message};
@@ -196,8 +197,9 @@ fn csv_columns_beyond_the_geometry_are_attributes_under_their_header_names() {
         .iter()
         .map(|a| a.name.as_str())
         .collect();
-    // An invalid or repeated name becomes the column's number; text is dropped with a note.
-    assert_eq!(names, ["Intensity", "col6", "col7", "t"]);
+    // A name the writers cannot write is mended, a repeated one numbered; text is dropped
+    // with a note.
+    assert_eq!(names, ["Intensity", "bad_name", "Intensity_2", "t"]);
     assert_eq!(
         read.cloud.attributes[0].data,
         AttributeData::I32(vec![7, 9])
@@ -216,6 +218,22 @@ fn csv_columns_beyond_the_geometry_are_attributes_under_their_header_names() {
             "a.csv: column 5 (label) is not carried to the output: line 2 holds \"roof\", not a \
           number"
         ]
+    );
+}
+
+#[test]
+fn ply_property_names_the_writers_cannot_write_are_mended() {
+    let text = "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n\
+                property float z\nproperty float scalar/Intensity\nproperty uchar scalar_Intensity\n\
+                end_header\n1 2 3 0.5 7\n";
+    let cloud = read_ply(text.as_bytes(), "cc.ply").unwrap();
+    let names: Vec<&str> = cloud.attributes.iter().map(|a| a.name.as_str()).collect();
+    assert_eq!(names, ["scalar_Intensity", "scalar_Intensity_2"]);
+    let mut csv = Vec::new();
+    mls_io::write_csv_to(&mut csv, "o.csv", &cloud.columns()).unwrap();
+    assert_eq!(
+        String::from_utf8(csv).unwrap(),
+        "x,y,z,scalar_Intensity,scalar_Intensity_2\n1.0,2.0,3.0,0.5,7\n"
     );
 }
 
@@ -410,10 +428,50 @@ fn attributes_of_a_ply_become_typed_las_extra_bytes() {
     let path = dir.path().join("o.las");
     write_point_cloud(&path, &cloud.columns(), PlyFormat::default()).unwrap();
     let back = mls_io::read_point_cloud(&path).unwrap();
-    // Point format 6's own dimensions first, then the PLY's attributes as they were.
-    let carried: Vec<Attribute> = back.attributes[15..].to_vec();
+    // Point format 6's own dimensions first, then the PLY's attributes as they were; the
+    // float `intensity` is not the 16-bit LAS intensity, so it is extra bytes of that name,
+    // read back beside the standard one as `intensity_2`.
+    let mut carried: Vec<Attribute> = back.attributes[15..].to_vec();
+    assert_eq!(carried[3].name, "intensity_2");
+    carried[3].name = "intensity".to_owned();
     assert_eq!(carried, expected_ply_attributes());
     assert_eq!(back.attributes[0].name, "intensity");
+    assert_eq!(back.attributes[0].data, AttributeData::U16(vec![0; 3]));
+}
+
+#[test]
+fn attributes_named_and_typed_as_las_fields_go_into_them() {
+    let points = [[0.0, 0.0, 0.0], [1.0, 2.0, 3.0]];
+    let intensity = Attribute {
+        name: "intensity".to_owned(),
+        data: AttributeData::U16(vec![7, 65535]),
+    };
+    let classification = Attribute {
+        name: "classification".to_owned(),
+        data: AttributeData::U8(vec![2, 200]),
+    };
+    // 20 does not fit the 4 bits of a return number: extra bytes, not the field.
+    let return_number = Attribute {
+        name: "return_number".to_owned(),
+        data: AttributeData::U8(vec![1, 20]),
+    };
+    let columns = [
+        Column::component("x", &points, Axis::X),
+        Column::component("y", &points, Axis::Y),
+        Column::component("z", &points, Axis::Z),
+        Column::attribute(&intensity),
+        Column::attribute(&classification),
+        Column::attribute(&return_number),
+    ];
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("f.las");
+    write_point_cloud(&path, &columns, PlyFormat::default()).unwrap();
+    let (header, read) = las_points(&std::fs::read(&path).unwrap());
+    assert_eq!(header.point_format().extra_bytes, 1);
+    assert_eq!(read[1].intensity, 65535);
+    assert_eq!(u8::from(read[1].classification), 200);
+    assert_eq!(read[1].return_number, 1);
+    assert_eq!(read[1].extra_bytes, [20]);
 }
 
 #[test]
