@@ -2,6 +2,7 @@
 //! anything else a file holds beside the coordinates and normals, each in the type the file
 //! stores it in.
 
+use std::collections::HashSet;
 use std::fmt::Write as _;
 
 /// The type of an attribute's values: the integer and float types that PLY, LAS extra bytes
@@ -401,14 +402,11 @@ pub struct Attribute {
     pub data: AttributeData,
 }
 
-/// `name` as an attribute name every writer can write, unique among `taken`: each character
-/// other than an ASCII letter, digit, `_`, `-` or `.` becomes `_` (an empty name becomes
-/// `fallback`), and a name already taken gets `_2`, `_3` … appended.
-pub(crate) fn usable_name<'t>(
-    name: &str,
-    fallback: &str,
-    taken: impl Iterator<Item = &'t str> + Clone,
-) -> String {
+/// `name` as an attribute name every writer can write, unique among `taken`, which it joins:
+/// each character other than an ASCII letter, digit, `_`, `-` or `.` becomes `_` (an empty
+/// name becomes `fallback`), and a name already taken gets `_2`, `_3` … appended. A set, not a
+/// scan: a PLY header may declare 10⁵ properties.
+pub(crate) fn usable_name(name: &str, fallback: &str, taken: &mut HashSet<String>) -> String {
     let base: String = if name.is_empty() {
         fallback.to_owned()
     } else {
@@ -422,14 +420,16 @@ pub(crate) fn usable_name<'t>(
             })
             .collect()
     };
-    let is_taken = |n: &str| taken.clone().any(|t| t == n);
-    if !is_taken(&base) {
-        return base;
-    }
-    (2..)
-        .map(|k| format!("{base}_{k}"))
-        .find(|n| !is_taken(n))
-        .unwrap_or(base)
+    let usable = if taken.contains(&base) {
+        (2..)
+            .map(|k| format!("{base}_{k}"))
+            .find(|n| !taken.contains(n))
+            .unwrap_or(base)
+    } else {
+        base
+    };
+    taken.insert(usable.clone());
+    usable
 }
 
 /// Renames attributes whose names are `reserved` (the columns an output computes, such as
@@ -437,15 +437,13 @@ pub(crate) fn usable_name<'t>(
 /// `name_in2`, `name_in3` … if that is taken too. Returns the renamings, `(old, new)`, in
 /// order, for a note.
 pub fn rename_clashes(attributes: &mut [Attribute], reserved: &[&str]) -> Vec<(String, String)> {
-    let mut taken: Vec<String> = reserved.iter().map(|&s| s.to_owned()).collect();
+    let mut taken: HashSet<String> = reserved.iter().map(|&s| s.to_owned()).collect();
     // Names kept as they are claim their place first, so a renamed attribute cannot take the
     // name of a later one.
     let mut clashes = Vec::new();
     for (i, a) in attributes.iter().enumerate() {
-        if taken.contains(&a.name) {
+        if !taken.insert(a.name.clone()) {
             clashes.push(i);
-        } else {
-            taken.push(a.name.clone());
         }
     }
     let mut renamed = Vec::new();
@@ -459,7 +457,7 @@ pub fn rename_clashes(attributes: &mut [Attribute], reserved: &[&str]) -> Vec<(S
             new = format!("{}_in{n}", a.name);
             n += 1;
         }
-        taken.push(new.clone());
+        taken.insert(new.clone());
         renamed.push((std::mem::replace(&mut a.name, new.clone()), new));
     }
     renamed
@@ -548,15 +546,13 @@ mod tests {
 
     #[test]
     fn names_are_made_usable_and_unique() {
-        let taken = ["a_b", "x", "x_2"];
-        assert_eq!(usable_name("a/b", "col4", taken.into_iter()), "a_b_2");
-        assert_eq!(
-            usable_name("Echo Width", "c", taken.into_iter()),
-            "Echo_Width"
-        );
-        assert_eq!(usable_name("", "col4", taken.into_iter()), "col4");
-        assert_eq!(usable_name("x", "c", taken.into_iter()), "x_3");
-        assert_eq!(usable_name("é", "c", taken.into_iter()), "_");
+        let mut taken: HashSet<String> = ["a_b", "x", "x_2"].map(String::from).into();
+        assert_eq!(usable_name("a/b", "col4", &mut taken), "a_b_2");
+        assert_eq!(usable_name("a/b", "col4", &mut taken), "a_b_3");
+        assert_eq!(usable_name("Echo Width", "c", &mut taken), "Echo_Width");
+        assert_eq!(usable_name("", "col4", &mut taken), "col4");
+        assert_eq!(usable_name("x", "c", &mut taken), "x_3");
+        assert_eq!(usable_name("é", "c", &mut taken), "_");
     }
 
     #[test]

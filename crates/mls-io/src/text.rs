@@ -393,6 +393,7 @@ pub fn read_csv_with(
     // For each column not in a slot, the attribute it fills, if any.
     let mut attribute_of = vec![None; width];
     let mut attributes = TextAttributes::default();
+    let mut taken = std::collections::HashSet::new();
     let mut present = [false; 6];
     for (column, column_name) in names.iter().enumerate() {
         let lowercase = column_name.to_ascii_lowercase();
@@ -401,11 +402,7 @@ pub fn read_csv_with(
                 continue;
             }
             // A name the writers can write back, and unique.
-            let name = usable_name(
-                column_name,
-                &format!("col{}", column + 1),
-                attributes.0.iter().map(|(n, _, _)| n.as_str()),
-            );
+            let name = usable_name(column_name, &format!("col{}", column + 1), &mut taken);
             if let Some(target) = attribute_of.get_mut(column) {
                 *target = Some(attributes.add(name, column + 1));
             }

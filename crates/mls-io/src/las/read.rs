@@ -1,6 +1,7 @@
 //! Reading LAS and LAZ: coordinates, every standard dimension of the point format and the
 //! extra bytes, as attributes, and the header's layout as a [`LasTemplate`].
 
+use std::collections::HashSet;
 use std::io::{self, Cursor, Read, Seek};
 
 use las::Reader;
@@ -64,6 +65,7 @@ where
             data: AttributeData::with_capacity(f.ty, capacity),
         });
     }
+    let mut taken: HashSet<String> = attributes.iter().map(|a| a.name.clone()).collect();
     let mut described = 0;
     for e in &extras {
         let end = e.offset + e.ty.map_or(0, crate::AttributeType::size);
@@ -89,11 +91,7 @@ where
         }
         // A name such as "Echo Width" becomes one every writer can write, and one that a
         // standard dimension already has gets a number; the descriptor keeps the original.
-        let usable = usable_name(
-            &e.name,
-            "extra",
-            attributes.iter().map(|a: &Attribute| a.name.as_str()),
-        );
+        let usable = usable_name(&e.name, "extra", &mut taken);
         sources.push(Source::Extra(base + e.offset));
         descriptors.push((usable.clone(), e.descriptor));
         attributes.push(Attribute {

@@ -10,6 +10,7 @@
 mod binary;
 mod header;
 
+use std::collections::HashSet;
 use std::io::BufRead;
 
 use crate::attributes::{Attribute, AttributeData, usable_name};
@@ -142,11 +143,11 @@ fn vertex_layout(
 /// writers could not write (`scalar/Intensity`) gets `_` for each character they refuse.
 fn attribute_columns(vertex: &Element, targets: &[Target], capacity: usize) -> Vec<Attribute> {
     let mut attributes: Vec<Attribute> = Vec::new();
+    let mut taken = HashSet::new();
     for (p, t) in vertex.properties.iter().zip(targets) {
         if let (Target::Attribute(_), PropertyKind::Scalar(ty)) = (t, p.kind) {
-            let taken = attributes.iter().map(|a| a.name.as_str());
             attributes.push(Attribute {
-                name: usable_name(&p.name, "property", taken),
+                name: usable_name(&p.name, "property", &mut taken),
                 data: AttributeData::with_capacity(ty.attribute_type(), capacity),
             });
         }
