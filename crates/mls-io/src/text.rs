@@ -315,12 +315,18 @@ pub fn read_xyz_with(
             ));
         }
     }
-    let candidate = |i: usize| {
-        roles
-            .iter()
-            .any(|r| matches!(r, Role::Candidate(_, j) if *j == i))
-    };
-    cloud.attributes = attributes.finish(name, |i| normals_found && candidate(i), &mut notes);
+    // The candidates' attribute columns, if they were taken as normals.
+    let mut normal_columns = [usize::MAX; 3];
+    if normals_found {
+        for role in &roles {
+            if let Role::Candidate(k, i) = *role
+                && let Some(slot) = normal_columns.get_mut(k)
+            {
+                *slot = i;
+            }
+        }
+    }
+    cloud.attributes = attributes.finish(name, |i| normal_columns.contains(&i), &mut notes);
     Ok(ReadOutcome { cloud, notes })
 }
 

@@ -29,6 +29,8 @@ pub(crate) struct ExtraField {
     pub(crate) code: u8,
     /// Offset within the extra bytes.
     pub(crate) offset: usize,
+    /// Size in bytes.
+    pub(crate) size: usize,
     pub(crate) descriptor: Descriptor,
 }
 
@@ -71,6 +73,7 @@ pub(crate) fn parse(header: &las::Header) -> Result<Vec<ExtraField>, String> {
             ty: AttributeType::from_las_code(code),
             code,
             offset,
+            size,
             descriptor: d.try_into().unwrap_or([0; DESCRIPTOR_BYTES]),
         });
         offset += size;

@@ -68,7 +68,7 @@ where
     let mut taken: HashSet<String> = attributes.iter().map(|a| a.name.clone()).collect();
     let mut described = 0;
     for e in &extras {
-        let end = e.offset + e.ty.map_or(0, crate::AttributeType::size);
+        let end = e.offset + e.size;
         described = described.max(end);
         if normal_offsets.is_some() && matches!(e.name.as_str(), "nx" | "ny" | "nz") {
             continue;
