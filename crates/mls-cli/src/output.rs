@@ -200,17 +200,24 @@ impl Carried {
     }
 
     /// Renames the attributes whose names the output's own `columns` have (`k1` → `k1_in`),
-    /// with a note on stderr for each, even with --quiet: a script reading the output by name
-    /// needs to know.
+    /// with one note on stderr naming them all, even with --quiet: a script reading the output
+    /// by name needs to know.
     pub fn rename_clashes(&mut self, columns: &[Column<'_>], input: &Path) {
         let reserved: Vec<&str> = columns.iter().map(|c| c.name).collect();
-        for (old, new) in mls_io::rename_clashes(&mut self.attributes, &reserved) {
-            eprintln!(
-                "mlscurv: note: {}: attribute `{old}` is written as `{new}`: the output has a \
-                 column `{old}` of its own",
-                input_name(input)
-            );
+        let renamed = mls_io::rename_clashes(&mut self.attributes, &reserved);
+        if renamed.is_empty() {
+            return;
         }
+        let list: Vec<String> = renamed
+            .iter()
+            .map(|(old, new)| format!("`{old}` as `{new}`"))
+            .collect();
+        eprintln!(
+            "mlscurv: note: {}: the output has columns of these names of its own, so the \
+             input's attributes are written as: {}",
+            input_name(input),
+            list.join(", ")
+        );
     }
 
     /// `columns` with the attributes after the first `after` (the geometry); call

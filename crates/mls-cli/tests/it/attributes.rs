@@ -141,8 +141,8 @@ fn clashing_names_are_renamed_with_a_note_and_no_attributes_drops_them() {
     assert_eq!(
         run.stderr,
         format!(
-            "mlscurv: note: {}: attribute `k1` is written as `k1_in2`: the output has a column \
-             `k1` of its own\n",
+            "mlscurv: note: {}: the output has columns of these names of its own, so the \
+             input's attributes are written as: `k1` as `k1_in2`\n",
             input.display()
         )
     );
