@@ -127,6 +127,8 @@ pub fn curvature(a: CurvatureArgs) -> Result<()> {
                 })
             },
         )?;
+        let mut carried = keep(carried, &a.out);
+        carried.check(output.format(), &a.input)?;
         let label = match a.at {
             At::Input => "curvature",
             At::Projected => "projection",
@@ -218,7 +220,6 @@ pub fn curvature(a: CurvatureArgs) -> Result<()> {
             columns.push(Column::f64("k2_sd", &out.k2_sd));
         }
         columns.push(Column::i32("status", &out.status));
-        let mut carried = keep(carried, &a.out);
         carried.rename_clashes(&columns, &a.input);
         let columns = carried.insert(columns, 6);
         t.time("write", || {
@@ -477,6 +478,7 @@ pub fn normals(a: NormalsArgs) -> Result<()> {
             cloud.las.take(),
             !a.out.no_attributes,
         );
+        carried.check(output.format(), &a.input)?;
         let points = pipeline::to_points(&cloud);
         let scale = t.time("spacing", || {
             pipeline::choose_h(&points, a.scale.h, a.scale.h_factor, par, &a.input)
@@ -558,6 +560,8 @@ pub fn project(a: ProjectArgs) -> Result<()> {
             &mut t,
             pipeline::fixed_surface,
         )?;
+        let mut carried = keep(carried, &a.out);
+        carried.check(output.format(), &a.input)?;
         let n = points.len();
         let mut nrm = Vec::with_capacity(n);
         let mut status = Vec::with_capacity(n);
@@ -587,7 +591,6 @@ pub fn project(a: ProjectArgs) -> Result<()> {
         columns.extend(vector_columns(["x", "y", "z"], &pos));
         columns.extend(vector_columns(["nx", "ny", "nz"], &nrm));
         columns.push(Column::i32("status", &status));
-        let mut carried = keep(carried, &a.out);
         carried.rename_clashes(&columns, &a.input);
         let columns = carried.insert(columns, 6);
         t.time("write", || {

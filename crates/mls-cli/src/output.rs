@@ -199,6 +199,25 @@ impl Carried {
         }
     }
 
+    /// Refuses, before any work is done, an attribute that `format` cannot hold: a LAS
+    /// extra-bytes name has at most 32 bytes.
+    pub fn check(&self, format: FileFormat, input: &Path) -> Result<()> {
+        if !matches!(format, FileFormat::Las | FileFormat::Laz) {
+            return Ok(());
+        }
+        if let Some(a) = self.attributes.iter().find(|a| a.name.len() > 32) {
+            bail!(
+                "{}: attribute `{}` has a name of {} bytes, but a LAS extra-bytes name holds at \
+                 most 32; write another format, or leave the attributes out with \
+                 --no-attributes",
+                input_name(input),
+                a.name,
+                a.name.len()
+            );
+        }
+        Ok(())
+    }
+
     /// Renames the attributes whose names the output's own `columns` have (`k1` → `k1_in`),
     /// with one note on stderr naming them all, even with --quiet: a script reading the output
     /// by name needs to know.

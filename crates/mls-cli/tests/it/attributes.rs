@@ -352,3 +352,40 @@ fn las_dimensions_scale_and_offset_survive_curvature() {
     assert_eq!(header.point_format().to_u8().unwrap(), 6);
     assert_eq!(points[1].intensity, 0);
 }
+
+#[test]
+fn an_attribute_name_too_long_for_las_is_refused_before_any_work() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("long.csv");
+    let name = "reflectance_after_atmospheric_correction";
+    let mut text = format!("x,y,z,{name}\n");
+    for (i, p) in unit_sphere().iter().enumerate() {
+        let _ = writeln!(text, "{},{},{},{i}", p[0], p[1], p[2]);
+    }
+    std::fs::write(&input, text).unwrap();
+    let output = dir.path().join("out.las");
+    let r = crate::common::run(
+        mlscurv()
+            .arg("curvature")
+            .arg(&input)
+            .arg("-o")
+            .arg(&output),
+    );
+    crate::common::assert_one_line_error(
+        &r,
+        "long.csv",
+        &[
+            &format!("attribute `{name}` has a name of 40 bytes"),
+            "--no-attributes",
+        ],
+    );
+    assert!(!output.exists());
+    run_ok(
+        mlscurv()
+            .arg("curvature")
+            .arg(&input)
+            .arg("-o")
+            .arg(&output)
+            .args(["--quiet", "--no-attributes"]),
+    );
+}
