@@ -317,9 +317,13 @@ pub fn write_xyz(path: &Path, columns: &[Column<'_>]) -> Result<(), WriteError> 
 
 /// Writes `columns` as LAS 1.4 (point format 6), or LAZ if `compressed`, atomically: the
 /// columns `x`, `y`, `z` as the point coordinates, on a decimal grid of 1e-8 to 1e-7 of the
-/// bounding box's largest extent with the offset at its minimum; every other column, in order,
-/// as a named LAS extra-bytes attribute (`double` for float columns, `long` (i32) for integer
-/// ones), which PDAL, laspy and CloudCompare show as dimensions.
+/// bounding box's largest extent with the offset at its minimum; an attribute column with the
+/// name and type of a point format 6 dimension (`intensity` `uint16` …; a flag only if every
+/// value fits its bits) in that field; every other column, in order, as a named LAS
+/// extra-bytes attribute (`double` for float columns, `long` (i32) for integer ones, an
+/// attribute's own type for attribute columns), which PDAL, laspy and CloudCompare show as
+/// dimensions. To keep a LAS input's layout, use [`write_point_cloud_as_with`] with its
+/// [`LasTemplate`].
 ///
 /// # Errors
 /// Those of [`write_ply`], [`WriteError::MissingCoordinate`] without an `x`, `y` or `z` column,
