@@ -548,7 +548,7 @@ const CONCLUSIONS: &str = "
   (heights only) to 0.037. Estimated normals come from the same positions; fitted as slopes they
   count the positions twice and bring the covariance estimate's bias (measured 10–100× worse), so
   they give the frame only, and the jet with estimated normals is 1.6–11× less accurate than with
-  exact ones (heights only), though still 3–9× better than the reference and, under noise, than
+  exact ones (heights only), though still 2.8–28× better than the reference and, under noise, than
   the paper's surface (k1 σ 0.042 against 0.056 at σ = 1e-4, 0.41 against 0.56 at σ = 1e-3).
 - **Scale.** The support climbs from 1.5 h by √2 up to 6 h while the scales' intervals
   (k ± 3 predicted sd) intersect and the bias (∝ ρ⁴, from the steps between scales) has not
