@@ -1,7 +1,18 @@
 """Type stub of the ``mlscurv`` extension module (crates/mls-py/src/lib.rs)."""
 
 import os
-from typing import Iterator, Literal, Mapping, Optional, Sequence, Tuple, Union
+from typing import (
+    Any,
+    Dict,
+    Iterator,
+    Literal,
+    Mapping,
+    Optional,
+    Sequence,
+    Tuple,
+    Union,
+    overload,
+)
 
 import numpy as np
 import numpy.typing as npt
@@ -112,14 +123,27 @@ def project(
 ) -> Result:
     """The points projected onto the MLS surface, with its normals, as ``mlscurv project``."""
 
+@overload
 def read(
     path: PathLike,
     *,
     format: Optional[Format] = None,
     columns: Union[str, Sequence[str], None] = None,
+    attributes: Literal[False] = False,
 ) -> Tuple[Float64Array, Optional[Float64Array]]:
     """(points, normals) of a PLY, XYZ/TXT/PTS, CSV or LAS/LAZ file; normals is None when the
     file has none."""
+
+@overload
+def read(
+    path: PathLike,
+    *,
+    format: Optional[Format] = None,
+    columns: Union[str, Sequence[str], None] = None,
+    attributes: Literal[True],
+) -> Tuple[Float64Array, Optional[Float64Array], Dict[str, npt.NDArray[Any]]]:
+    """(points, normals, attributes): attributes maps the file's other per-point values (PLY
+    properties, text columns, LAS dimensions) to arrays of their stored types."""
 
 def write(
     path: PathLike,

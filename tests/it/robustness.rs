@@ -6,8 +6,8 @@ use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 use mls_io::{
-    PlyFormat, PointCloud, ReadError, read_csv, read_ply, read_xyz, write_csv_to, write_ply_to,
-    write_xyz_to,
+    PlyFormat, PointCloud, ReadError, ReadOptions, read_csv, read_ply, read_xyz, read_xyz_with,
+    write_csv_to, write_ply_to, write_xyz_to,
 };
 
 fn seeds(format: &str) -> Vec<(PathBuf, Vec<u8>)> {
@@ -30,7 +30,8 @@ fn seeds(format: &str) -> Vec<(PathBuf, Vec<u8>)> {
 }
 
 /// What the fuzz targets assert: an `Ok` cloud is finite, has one normal per point and
-/// survives a write and re-read; an error is one line starting with the display name.
+/// survives a write and re-read (an XYZ file unless a column was dropped); an error is one
+/// line starting with the display name.
 fn check(format: &str, bytes: &[u8], what: &str) {
     let name = format!("seed.{format}");
     let started = Instant::now();
@@ -41,6 +42,11 @@ fn check(format: &str, bytes: &[u8], what: &str) {
             _ => read_csv(b, &name),
         }
     };
+    // A headerless file's attributes are named by position: a column dropped for holding text
+    // shifts the names of those after it in the file written back.
+    let dropped = format == "xyz"
+        && read_xyz_with(bytes, &name, &ReadOptions::default())
+            .is_ok_and(|r| r.notes.iter().any(|n| n.contains("is not carried")));
     match read(bytes) {
         Ok(cloud) => {
             assert!(
@@ -51,7 +57,7 @@ fn check(format: &str, bytes: &[u8], what: &str) {
                 assert_eq!(normals.len(), cloud.len(), "{what}");
                 assert!(normals.iter().flatten().all(|c| c.is_finite()), "{what}");
             }
-            if cloud.is_empty() && format == "xyz" {
+            if (cloud.is_empty() && format == "xyz") || dropped {
                 return;
             }
             let mut out = Vec::new();

@@ -458,6 +458,7 @@ fn io_measurements(cloud: &Cloud, results: &[PointResult], work: &Path) -> Resul
     let pc = PointCloud {
         points: cloud.points.iter().map(|p| p.coords.into()).collect(),
         normals: Some(cloud.normals.iter().map(|&v| v.into()).collect()),
+        ..PointCloud::default()
     };
     let input = work.join("io-input.ply");
     let (
@@ -700,10 +701,12 @@ fn cli_measurements_inner(exe: &Path, cloud: &Cloud, work: &Path, profile: bool)
     let with = PointCloud {
         points: points.clone(),
         normals: Some(cloud.normals.iter().map(|&v| v.into()).collect()),
+        ..PointCloud::default()
     };
     let without = PointCloud {
         points,
         normals: None,
+        ..PointCloud::default()
     };
     let mut runs = Vec::new();
     let mut profiles = Vec::new();

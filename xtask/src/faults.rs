@@ -64,8 +64,8 @@ const FAULTS: &[Fault] = &[
         name: "J1 slope sign",
         description: "the jet's slope data from a normal ν taken as +ν_u/ν_w instead of −ν_u/ν_w",
         file: "crates/mls-core/src/jet.rs",
-        original: "slope: -a / c,",
-        replacement: "slope: a / c,",
+        original: "[-a / c, -b / c]",
+        replacement: "[a / c, -b / c]",
     },
     Fault {
         name: "J2 mixed term of the jet's Hessian",
@@ -85,8 +85,8 @@ const FAULTS: &[Fault] = &[
         name: "J4 slope degrees of freedom",
         description: "the slopes' share of the hat matrix's trace counted without the weight λ",
         file: "crates/mls-core/src/jet.rs",
-        original: "slopes.weight - lambda * inv.dot(&sp2)",
-        replacement: "slopes.weight - inv.dot(&sp2)",
+        original: "weight_s - lambda * inv.dot(&sp2)",
+        replacement: "weight_s - inv.dot(&sp2)",
     },
 ];
 

@@ -243,6 +243,9 @@ pub fn jet_candidates(
     let mut best: Option<JetWitness> = None;
     let mut ladder: Vec<JetWitness> = Vec::new();
     let mut accepted = 0;
+    // Full-degree fits with fewer than 3 equations per coefficient: candidates at the front
+    // of the ladder that neither narrow the intervals nor stop the climb.
+    let mut early = 0;
     let mut fallback: Option<JetWitness> = None;
     let (mut lo, mut hi) = ([f64::NEG_INFINITY; 2], [f64::INFINITY; 2]);
     for j in 0..config.scales.max(1) {
@@ -329,6 +332,11 @@ pub fn jet_candidates(
             fallback = fallback.or(Some(here));
             continue;
         }
+        if best.is_none() && (equations as f64) < 3.0 * ((degree + 1) * (degree + 2) / 2) as f64 {
+            ladder.push(here);
+            early += 1;
+            continue;
+        }
         let k = [here.k1, here.k2];
         let mut agree = true;
         for i in 0..2 {
@@ -344,7 +352,7 @@ pub fn jet_candidates(
         accepted = ladder.len();
         best = Some(here);
         // Stop once the previous scale's bias (from the last step, ∝ ρ⁴) exceeds its scatter.
-        if let [.., a, b] = ladder.as_slice() {
+        if let [.., a, b] = &ladder[early..] {
             let bias2 = ((b.k1 - a.k1) / 3.0).powi(2) + ((b.k2 - a.k2) / 3.0).powi(2);
             let floor = 2e-8 / a.radius;
             if bias2 > a.sd[0].powi(2) + a.sd[1].powi(2) || (a.sd[0] <= floor && a.sd[1] <= floor) {
@@ -353,7 +361,10 @@ pub fn jet_candidates(
         }
     }
     if best.is_none() {
-        return fallback.map(|w| vec![(0.0, w)]);
+        if early == 0 {
+            return fallback.map(|w| vec![(0.0, w)]);
+        }
+        accepted = early;
     }
     // Least estimated squared error among the accepted scales; the bias of scale j is
     // t_j √(c² + var c) from the weighted line k = k* + c t, t = (ρ/ρ₀)⁴, through every fit.

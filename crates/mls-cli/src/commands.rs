@@ -1,17 +1,16 @@
-//! The subcommands.
+//! The subcommands that compute: `curvature`, `eval`, `normals`, `project` (`info` is in
+//! `info.rs`).
 
-use std::fmt::Write as _;
 use std::path::Path;
 
 use anyhow::{Context, Result};
 use mls_cli::evaluate::{self, vector_columns};
-use mls_cli::pipeline::{self, Built, Prepared, Timings};
+use mls_cli::pipeline::{self, Built, Carried, Prepared, Timings};
 use mls_cli::{At, CurvatureOptions, Method};
-use mls_core::normals::{DEFAULT_NEIGHBOURS, NeighbourGraph, orientation_consistency};
 use mls_core::{AdaptiveConfig, MlsConfig, MlsSurface, Parallelism, Point, Vector};
 use mls_io::Column;
 
-use crate::{CurvatureArgs, EvalArgs, InfoArgs, NormalsArgs, OutputArgs, ProjectArgs, interactive};
+use crate::{CurvatureArgs, EvalArgs, NormalsArgs, OutputArgs, ProjectArgs, interactive};
 
 /// The output of a command with [`OutputArgs`], checked before any work is done.
 fn output(inputs: &[&Path], out: &OutputArgs) -> Result<pipeline::Output> {
@@ -48,6 +47,7 @@ pub fn curvature(a: CurvatureArgs) -> Result<()> {
                     normals_from_file,
                     surface,
                 },
+            carried,
         } = pipeline::prepare(
             &a.input,
             a.out.formats.input_format,
@@ -56,6 +56,8 @@ pub fn curvature(a: CurvatureArgs) -> Result<()> {
             &mut t,
             evaluate::curvature_surface(a.adaptive),
         )?;
+        let mut carried = keep(carried, &a.out);
+        carried.check(output.format(), &a.input)?;
         let jet = evaluate::jet_config(normals_from_file);
         let n = points.len();
         let mut out = t.time(evaluate::curvature_label(a.at), || {
@@ -69,7 +71,11 @@ pub fn curvature(a: CurvatureArgs) -> Result<()> {
             None => points.into_iter().map(|p| p.coords.into()).collect(),
         };
         let columns = out.columns(&pos);
-        t.time("write", || output.write(&columns, a.out.ascii))?;
+        carried.rename_clashes(&columns, &a.input);
+        let columns = carried.insert(columns, 6);
+        t.time("write", || {
+            output.write(&columns, a.out.ascii, carried.las.as_ref())
+        })?;
         if !s.run.quiet {
             eprintln!("mlscurv curvature: {}", pipeline::input_name(&a.input));
             eprintln!("  points read     {n}");
@@ -124,6 +130,11 @@ pub fn curvature(a: CurvatureArgs) -> Result<()> {
         }
         Ok(())
     })
+}
+
+/// What the input carries to the output, unless `--no-attributes`.
+fn keep(carried: Carried, out: &OutputArgs) -> Carried {
+    Carried::new(carried.attributes, carried.las, !out.no_attributes)
 }
 
 /// The options that set h, for the summaries.
@@ -288,7 +299,8 @@ fn eval_with(a: &EvalArgs, output: &pipeline::Output) -> Result<()> {
         .map(|(name, c)| Column::f64(name, c))
         .collect();
     columns.push(Column::i32("status", &status));
-    t.time("write", || output.write(&columns, false))?;
+    // Attributes belong to the cloud's points, not to the queries.
+    t.time("write", || output.write(&columns, false, None))?;
     if !a.run.quiet {
         eprintln!("mlscurv eval: {cloud_name}");
         eprintln!("  points read     {}", points.len());
@@ -311,9 +323,15 @@ pub fn normals(a: NormalsArgs) -> Result<()> {
     pipeline::with_threads(a.run.threads, || {
         let mut t = Timings::default();
         let par = Parallelism::Rayon;
-        let cloud = t.time("read", || {
+        let mut cloud = t.time("read", || {
             pipeline::read(&a.input, a.out.formats.input_format, a.columns.as_ref())
         })?;
+        let mut carried = Carried::new(
+            std::mem::take(&mut cloud.attributes),
+            cloud.las.take(),
+            !a.out.no_attributes,
+        );
+        carried.check(output.format(), &a.input)?;
         let points = pipeline::to_points(&cloud);
         let name = pipeline::input_name(&a.input);
         let scale = t.time("spacing", || {
@@ -340,7 +358,11 @@ pub fn normals(a: NormalsArgs) -> Result<()> {
         if output.format() != mls_io::FileFormat::Xyz {
             columns.push(Column::i32("status", &status));
         }
-        t.time("write", || output.write(&columns, a.out.ascii))?;
+        carried.rename_clashes(&columns, &a.input);
+        let columns = carried.insert(columns, 6);
+        t.time("write", || {
+            output.write(&columns, a.out.ascii, carried.las.as_ref())
+        })?;
         if !a.run.quiet {
             eprintln!("mlscurv normals: {}", pipeline::input_name(&a.input));
             eprintln!("  points read     {}", points.len());
@@ -371,6 +393,7 @@ pub fn project(a: ProjectArgs) -> Result<()> {
                     surface,
                     ..
                 },
+            carried,
         } = pipeline::prepare(
             &a.input,
             a.out.formats.input_format,
@@ -379,6 +402,8 @@ pub fn project(a: ProjectArgs) -> Result<()> {
             &mut t,
             pipeline::fixed_surface,
         )?;
+        let mut carried = keep(carried, &a.out);
+        carried.check(output.format(), &a.input)?;
         let n = points.len();
         let out = t.time("projection", || {
             evaluate::projection(&points, &surface, interactive(s.run.quiet))
@@ -389,7 +414,11 @@ pub fn project(a: ProjectArgs) -> Result<()> {
         columns.extend(vector_columns(["x", "y", "z"], &out.points));
         columns.extend(vector_columns(["nx", "ny", "nz"], &out.normal));
         columns.push(Column::i32("status", &out.status));
-        t.time("write", || output.write(&columns, a.out.ascii))?;
+        carried.rename_clashes(&columns, &a.input);
+        let columns = carried.insert(columns, 6);
+        t.time("write", || {
+            output.write(&columns, a.out.ascii, carried.las.as_ref())
+        })?;
         if !s.run.quiet {
             eprintln!("mlscurv project: {}", pipeline::input_name(&a.input));
             eprintln!("  points read     {n}");
@@ -402,87 +431,4 @@ pub fn project(a: ProjectArgs) -> Result<()> {
         }
         Ok(())
     })
-}
-
-pub fn info(a: InfoArgs) -> Result<()> {
-    // The report is collected and written at once: `println!` panics when the reader of a pipe
-    // (`mlscurv info x.ply | head -3`) has gone.
-    let mut out = String::new();
-    let result = info_report(&a, &mut out);
-    pipeline::write_stdout(out.as_bytes())?;
-    result
-}
-
-fn info_report(a: &InfoArgs, out: &mut String) -> Result<()> {
-    // Writing to a String cannot fail.
-    macro_rules! println {
-        ($($arg:tt)*) => {{
-            let _ = writeln!(out, $($arg)*);
-        }};
-    }
-    let cloud = pipeline::read_any(&a.input, a.input_format, a.columns.as_ref())?;
-    let points = pipeline::to_points(&cloud);
-    println!("file            {}", pipeline::input_name(&a.input));
-    println!("points          {}", points.len());
-    if points.is_empty() {
-        return Ok(());
-    }
-    let (lo, hi) = points
-        .iter()
-        .fold((points[0].coords, points[0].coords), |(lo, hi), p| {
-            (lo.inf(&p.coords), hi.sup(&p.coords))
-        });
-    println!(
-        "bounding box    [{:.6}, {:.6}, {:.6}] .. [{:.6}, {:.6}, {:.6}]",
-        lo.x, lo.y, lo.z, hi.x, hi.y, hi.z
-    );
-    let size = hi - lo;
-    println!(
-        "size            {:.6} × {:.6} × {:.6}",
-        size.x, size.y, size.z
-    );
-    match pipeline::choose_h(
-        &points,
-        None,
-        mls_core::normals::DEFAULT_H_FACTOR,
-        Parallelism::Rayon,
-        &pipeline::input_name(&a.input),
-    ) {
-        Ok(scale) => {
-            if let Some(s) = scale.spacing {
-                println!(
-                    "spacing         {:.6} (median local); nearest neighbour min {:.6}, median {:.6}, p90 {:.6}, max {:.6}",
-                    s.spacing, s.nearest.min, s.nearest.median, s.nearest.p90, s.nearest.max
-                );
-                println!("duplicates      {}", s.duplicates);
-            }
-            println!("suggested h     {:.6} = {}", scale.h, scale.why);
-        }
-        Err(e) => println!("spacing         unavailable: {e:#}"),
-    }
-    match &cloud.normals {
-        None => println!("normals         absent (curvature will estimate and orient them)"),
-        Some(n) => {
-            let normals: Vec<Vector> = n.iter().map(|n| Vector::from(*n)).collect();
-            let zero = normals
-                .iter()
-                .filter(|n| mls_core::UnitNormal::new(**n).is_err())
-                .count();
-            let graph = NeighbourGraph::build(&points, DEFAULT_NEIGHBOURS, Parallelism::Rayon)?;
-            let consistency = orientation_consistency(&graph, &normals, Parallelism::Rayon)?;
-            let verdict = match consistency {
-                Some(c) if c >= 0.99 => format!(
-                    "consistently oriented ({:.2}% of neighbour pairs agree)",
-                    100.0 * c
-                ),
-                Some(c) => format!(
-                    "NOT consistently oriented: {:.2}% of neighbour pairs agree (use --normals estimate)",
-                    100.0 * c
-                ),
-                None => "orientation unknown (no neighbour pairs with normals)".into(),
-            };
-            println!("normals         present, {zero} zero or invalid; {verdict}");
-        }
-    }
-    Ok(())
 }

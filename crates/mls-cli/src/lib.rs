@@ -1,13 +1,14 @@
 //! The steps of `mlscurv`'s commands, as a library: reading and checking a cloud, choosing h,
-//! getting oriented normals, building the surface and evaluating it chunk by chunk into the
-//! output columns. The binary (`src/main.rs`) adds the command line, the output checks and
-//! the summaries; the Python package (`crates/mls-py`) calls the same functions on arrays, so
+//! getting oriented normals, building the surface, evaluating it chunk by chunk into the
+//! output columns, and writing them with the input's attributes carried (`output`). The binary
+//! (`src/main.rs`) adds the command line, `info` and the summaries; the Python package (`crates/mls-py`) calls the same functions on arrays, so
 //! that both give the same bits and the same messages.
 //!
 //! Errors are `anyhow` chains whose one-line form (`{:#}`) is what `mlscurv` prints after
 //! `mlscurv: error:`; the Python package raises them with the same text.
 
 pub mod evaluate;
+pub mod output;
 pub mod pipeline;
 pub mod progress;
 
@@ -57,7 +58,7 @@ pub enum Format {
     Xyz,
     /// Comma-separated columns with a header row.
     Csv,
-    /// ASPRS LAS (points only on input; computed columns as extra bytes on output).
+    /// ASPRS LAS (every dimension carried; computed columns as extra bytes on output).
     Las,
     /// LASzip-compressed LAS.
     Laz,

@@ -9,6 +9,7 @@ use clap::{ArgAction, Args, CommandFactory as _, FromArgMatches as _, Subcommand
 use mls_cli::{At, Format, Method, NormalsMode, parse_cutoff, parse_orient, positive_finite};
 
 mod commands;
+mod info;
 
 #[derive(Debug, clap::Parser)]
 #[command(
@@ -110,9 +111,10 @@ impl SurfaceArgs {
 }
 
 const COLUMNS_HELP: &str = "Names of the columns of a text input (.xyz/.txt/.pts, or .csv \
-    instead of its header), e.g. `x,y,z,nx,ny,nz,intensity`: x, y, z and nx, ny, nz are read, \
-    other names skipped. Without it, columns 4-6 of a headerless file are normals only if they \
-    are unit vectors on every row";
+    instead of its header), e.g. `x,y,z,nx,ny,nz,intensity`: x, y, z and nx, ny, nz are the \
+    geometry, `_` skips a column, other names are attributes carried to the output. Without \
+    it, columns 4-6 of a headerless file are normals only if they are unit vectors on every \
+    row, and other columns are carried as col4, col5 ...";
 
 /// The output file, and the formats of the input and output.
 #[derive(Debug, Args)]
@@ -127,6 +129,11 @@ struct OutputArgs {
     /// Replace the output file even if it is read-only (it keeps its permissions).
     #[arg(long)]
     force: bool,
+    /// Do not carry the input's other per-point values (colour, intensity, LAS dimensions and
+    /// extra bytes, other PLY properties and text columns) to the output; a LAS output then
+    /// gets point format 6 and a scale of its own, not the LAS input's.
+    #[arg(long)]
+    no_attributes: bool,
     #[command(flatten)]
     formats: FormatArgs,
 }
@@ -314,7 +321,7 @@ fn main() -> ExitCode {
         Command::Eval(a) => commands::eval(a),
         Command::Normals(a) => commands::normals(a),
         Command::Project(a) => commands::project(a),
-        Command::Info(a) => commands::info(a),
+        Command::Info(a) => info::info(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

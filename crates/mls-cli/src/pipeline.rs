@@ -1,7 +1,7 @@
 //! Shared steps: read and check the input, choose h, get oriented normals, build the surface.
 
 use std::io::{IsTerminal as _, Read as _};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::time::Instant;
 
 use anyhow::{Context, Result, anyhow, bail};
@@ -13,8 +13,9 @@ use mls_core::{
     AdaptiveSurface, ConfigError, Cutoff, MlsConfig, MlsSurface, Parallelism, Point, PointStatus,
     Vector,
 };
-use mls_io::{Column, FileFormat, PlyFormat, PointCloud, ReadError};
+use mls_io::{FileFormat, PointCloud, ReadError};
 
+pub use crate::output::{Carried, Output, check_output, write_stdout};
 use crate::{Format, NormalsMode, SurfaceOptions};
 
 /// The smallest cloud a neighbourhood can be built from: a covariance normal needs 3 points
@@ -43,7 +44,7 @@ pub const STDIN_NAME: &str = "<stdin>";
 /// The name of standard output in messages.
 pub const STDOUT_NAME: &str = "<stdout>";
 
-fn is_stdio(path: &Path) -> bool {
+pub(crate) fn is_stdio(path: &Path) -> bool {
     path.as_os_str() == STDIO
 }
 
@@ -162,156 +163,6 @@ pub fn check_count(n: usize, file: &str) -> Result<()> {
         bail!("{file}: {n} point(s); at least {MIN_POINTS} are needed to build a neighbourhood");
     }
     Ok(())
-}
-
-/// Where a command's table goes.
-#[derive(Debug)]
-pub enum Output {
-    /// A file, written atomically.
-    File(PathBuf, FileFormat),
-    /// Standard output (`-o -`).
-    Stdout(FileFormat),
-}
-
-impl Output {
-    pub fn format(&self) -> FileFormat {
-        match self {
-            Self::File(_, f) | Self::Stdout(f) => *f,
-        }
-    }
-
-    /// The name for the summary and messages.
-    pub fn name(&self) -> String {
-        match self {
-            Self::File(path, _) => path.display().to_string(),
-            Self::Stdout(_) => STDOUT_NAME.to_owned(),
-        }
-    }
-
-    /// Writes the table; PLY in binary little endian unless `ascii`.
-    pub fn write(&self, columns: &[Column<'_>], ascii: bool) -> Result<()> {
-        let ply = if ascii {
-            PlyFormat::Ascii
-        } else {
-            PlyFormat::BinaryLittleEndian
-        };
-        match self {
-            Self::File(path, format) => {
-                mls_io::write_point_cloud_as(path, *format, columns, ply)?;
-            }
-            Self::Stdout(format) => {
-                let written = mls_io::write_point_cloud_to(
-                    std::io::stdout().lock(),
-                    STDOUT_NAME,
-                    *format,
-                    columns,
-                    ply,
-                );
-                match written {
-                    Err(mls_io::WriteError::Io { error, .. })
-                        if error.kind() == std::io::ErrorKind::BrokenPipe =>
-                    {
-                        quit_on_broken_pipe();
-                    }
-                    other => other?,
-                }
-            }
-        }
-        Ok(())
-    }
-}
-
-/// The reader of standard output has gone (`mlscurv … -o - | head`): stop quietly and
-/// successfully, as a program killed by SIGPIPE would stop, without a message about it.
-fn quit_on_broken_pipe() -> ! {
-    std::process::exit(0)
-}
-
-/// Writes to standard output, quitting quietly if the reader has gone.
-pub fn write_stdout(bytes: &[u8]) -> Result<()> {
-    use std::io::Write as _;
-    let mut stdout = std::io::stdout().lock();
-    match stdout.write_all(bytes).and_then(|()| stdout.flush()) {
-        Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => quit_on_broken_pipe(),
-        other => other.map_err(|e| anyhow!("{STDOUT_NAME}: {e}")),
-    }
-}
-
-/// Checks the output before any work is done, so that a long run does not end in an error
-/// the command line already showed: `-` is standard output in `format` (default
-/// `stdout_default`, else CSV); a file must not be one of the `inputs`, must have a known
-/// extension that agrees with `format`, must not be a directory, must be in an existing
-/// directory, and must not be read-only unless `force`.
-pub fn check_output(
-    inputs: &[&Path],
-    path: &Path,
-    format: Option<Format>,
-    force: bool,
-    ascii: bool,
-    stdout_default: Option<FileFormat>,
-) -> Result<Output> {
-    let format = format.map(FileFormat::from);
-    if is_stdio(path) {
-        let format = format.or(stdout_default).unwrap_or(FileFormat::Csv);
-        if format == FileFormat::Ply && !ascii && std::io::stdout().is_terminal() {
-            bail!(
-                "{STDOUT_NAME}: refusing to write binary PLY to a terminal; redirect it, or add --ascii"
-            );
-        }
-        if matches!(format, FileFormat::Las | FileFormat::Laz) && std::io::stdout().is_terminal() {
-            bail!("{STDOUT_NAME}: refusing to write binary LAS/LAZ to a terminal; redirect it");
-        }
-        return Ok(Output::Stdout(format));
-    }
-    let name = path.display();
-    for input in inputs {
-        if !is_stdio(input) && mls_io::same_file(input, path) {
-            bail!("{name}: output path is the input file; refusing to overwrite it");
-        }
-    }
-    let existing = std::fs::metadata(path).ok();
-    if existing.as_ref().is_some_and(std::fs::Metadata::is_dir) {
-        bail!("{name}: is a directory; expected an output file name");
-    }
-    let format = match (format, FileFormat::from_path(path)) {
-        (Some(given), Some(by_extension)) if given != by_extension => bail!(
-            "{name}: --output-format {} disagrees with the file's extension, which means {}",
-            format_name(given),
-            format_name(by_extension)
-        ),
-        (Some(format), _) | (None, Some(format)) => format,
-        (None, None) => bail!(
-            "{name}: {}; expected .ply, .csv, .xyz, .txt, .pts, .las or .laz, or name the format with --output-format ply|xyz|csv|las|laz",
-            match path.extension() {
-                Some(e) => format!("unknown extension \".{}\"", e.to_string_lossy()),
-                None => "no file extension".to_owned(),
-            }
-        ),
-    };
-    let dir = match path.parent() {
-        Some(parent) if !parent.as_os_str().is_empty() => parent,
-        _ => Path::new("."),
-    };
-    match std::fs::metadata(dir) {
-        Ok(meta) if meta.is_dir() => {}
-        Ok(_) => bail!("{name}: {} is not a directory", dir.display()),
-        Err(e) => bail!("{name}: directory {}: {e}", dir.display()),
-    }
-    if let Some(meta) = existing {
-        // `readonly` is the mode alone (root could write anyway); opening for writing, without
-        // truncating, asks the operating system whether this user may write to the file.
-        let denied = meta.permissions().readonly()
-            || std::fs::OpenOptions::new()
-                .write(true)
-                .open(path)
-                .is_err_and(|e| e.kind() == std::io::ErrorKind::PermissionDenied);
-        if denied && !force {
-            bail!(
-                "{name}: the file is read-only; refusing to replace it (add --force to replace it, keeping its permissions)"
-            );
-        }
-    }
-    Ok(Output::File(path.to_path_buf(), format))
 }
 
 pub fn to_points(cloud: &PointCloud) -> Vec<Point> {
@@ -614,11 +465,15 @@ pub struct Built<S = MlsSurface> {
     pub surface: S,
 }
 
-/// [`Built`] and the input points it was built from, in file order.
+/// [`Built`], the input points it was built from, in file order, and what they carry to the
+/// output.
 #[derive(Debug)]
 pub struct Prepared<S = MlsSurface> {
     pub points: Vec<Point>,
     pub built: Built<S>,
+    /// The input's attributes and LAS layout (all of them: the command drops them for
+    /// `--no-attributes`).
+    pub carried: Carried,
 }
 
 /// The surface `mlscurv curvature` evaluates: one scale, or a per-point scale (`--adaptive`).
@@ -658,6 +513,8 @@ pub fn prepare<S>(
     let PointCloud {
         points,
         normals: file_normals,
+        attributes,
+        las,
     } = t.time("read", || read(input, format, columns))?;
     // `[f64; 3]` and `Point` have the same layout: the conversion reuses the buffer.
     let points: Vec<Point> = points.into_iter().map(Point::from).collect();
@@ -670,7 +527,11 @@ pub fn prepare<S>(
         print_warning,
         build,
     )?;
-    Ok(Prepared { points, built })
+    Ok(Prepared {
+        points,
+        built,
+        carried: Carried::new(attributes, las, true),
+    })
 }
 
 /// Chooses h, checks it against the cloud (passing its warnings to `warn` at once), gets

@@ -32,9 +32,8 @@
 //! **Scale.** Support radii `ρ_j = ρ_0 √2^j` form a ladder, climbed while the confidence
 //! intervals `k_j ± Γ sd_j` of every scale so far intersect and the bias has not overtaken
 //! the scatter; the returned scale has the least estimated `sd² + bias²` ([`choose_scale`]).
+//! Fits too thin to trust their own noise estimate ([`trusted`]) are candidates only.
 //! `docs/derivation.md` has the details and `mls_ad::jet_witness` recomputes all of it.
-
-use nalgebra::{Cholesky, SMatrix, SVector};
 
 use crate::curvature::{Curvature, curvature};
 use crate::field::Sample;
@@ -115,6 +114,9 @@ pub struct JetFit {
     pub radius: f64,
     /// Samples within the support.
     pub neighbours: usize,
+    /// Equations of the fit: one height per sample, and two slopes per sample whose normal
+    /// enters the fit.
+    pub equations: usize,
     /// Coefficients `a_ij` of `u^i v^j` in the frame, in file units; unused ones are 0.
     pub coefficients: [f64; 15],
     /// Estimated position noise σ̂ (residual standard deviation of the heights), file units.
@@ -137,60 +139,6 @@ pub struct JetPoint {
     pub bias: [f64; 2],
     /// The fit the result comes from.
     pub fit: JetFit,
-}
-
-/// Normal equations of one kind of data (heights, or slopes from normals).
-#[derive(Clone, Copy)]
-struct Equations {
-    /// `Σ ω φ φᵀ`.
-    m: SMatrix<f64, 15, 15>,
-    /// `Σ ω² φ φᵀ`, for the variance of the coefficients.
-    m2: SMatrix<f64, 15, 15>,
-    /// `Σ ω φ y`.
-    rhs: SVector<f64, 15>,
-    /// `Σ ω` over the equations.
-    weight: f64,
-}
-
-impl Equations {
-    fn new() -> Self {
-        Self {
-            m: SMatrix::zeros(),
-            m2: SMatrix::zeros(),
-            rhs: SVector::zeros(),
-            weight: 0.0,
-        }
-    }
-
-    /// Adds the row `φ · c = y` with weight `w`, to the upper triangles only: column `a`'s
-    /// rows `0..=a` are contiguous in the column-major storage, so the loop vectorises.
-    fn add(&mut self, phi: &[f64; 15], y: f64, w: f64, terms: usize) {
-        let (m, m2) = (self.m.as_mut_slice(), self.m2.as_mut_slice());
-        for a in 0..terms {
-            let wa = w * phi[a];
-            let wwa = wa * w;
-            self.rhs[a] += wa * y;
-            let column = a * 15..a * 15 + a + 1;
-            for ((c, c2), &pb) in m[column.clone()]
-                .iter_mut()
-                .zip(&mut m2[column])
-                .zip(&phi[..=a])
-            {
-                *c += wa * pb;
-                *c2 += wwa * pb;
-            }
-        }
-        self.weight += w;
-    }
-
-    fn symmetrise(&mut self, terms: usize) {
-        for a in 0..terms {
-            for b in 0..a {
-                self.m[(a, b)] = self.m[(b, a)];
-                self.m2[(a, b)] = self.m2[(b, a)];
-            }
-        }
-    }
 }
 
 /// Whether, and how, the samples' normals enter the fit.
@@ -307,32 +255,12 @@ pub fn fit(
     normals: NormalData,
     scratch: &mut JetScratch,
 ) -> Option<JetFit> {
-    let inv_r2 = 1.0 / (radius * radius);
     let max_degree = degree.clamp(2, 4);
-    let terms = coefficient_count(max_degree);
-    let mut heights = Equations::new();
-    let mut slopes = Equations::new();
-    let mut count = 0;
-    let mut slope_rows = 0;
-    let rows = &mut scratch.rows;
-    rows.clear();
-    for_each_row(samples, centre, frame, inv_r2, radius, normals, |row| {
-        rows.push(row)
-    });
-    for row in rows.iter() {
-        match *row {
-            Row::Height { phi, z, w } => {
-                heights.add(&phi, z, w, terms);
-                count += 1;
-            }
-            Row::Slope { phi, slope, w } => {
-                slopes.add(&phi, slope, w, terms);
-                slope_rows += 1;
-            }
-        };
-    }
-    heights.symmetrise(terms);
-    slopes.symmetrise(terms);
+    let locals = &mut scratch.locals;
+    local_samples(samples, centre, frame, radius, normals, locals);
+    let moments = Moments::of(locals);
+    let count = moments.heights;
+    let slope_rows = 2 * moments.slope_samples;
     // A degree needs 1.5 equations (heights and slopes) per coefficient: a count, so that the
     // choice never hangs on rounding; the pivot test in `solve` only catches degenerate layouts such as a line.
     let mut deg = max_degree;
@@ -347,9 +275,9 @@ pub fn fit(
     }
     loop {
         let fitted = match deg {
-            4 => solve::<15>(rows, normals, &heights, &slopes),
-            3 => solve::<10>(rows, normals, &heights, &slopes),
-            _ => solve::<6>(rows, normals, &heights, &slopes),
+            4 => solve::<15>(locals, normals, &moments),
+            3 => solve::<10>(locals, normals, &moments),
+            _ => solve::<6>(locals, normals, &moments),
         };
         if let Some(solution) = fitted {
             let mut coefficients = [0.0; 15];
@@ -361,6 +289,7 @@ pub fn fit(
                 degree: deg,
                 radius,
                 neighbours: count,
+                equations: count + slope_rows,
                 coefficients,
                 noise: solution.height_noise * radius,
                 // (a20, a11, a02) = (c20, c11, c02)/ρ.
@@ -374,32 +303,39 @@ pub fn fit(
     }
 }
 
-/// Reusable storage for [`fit`]: the equations of one fit, kept for the residual passes.
+/// Reusable storage for [`fit`]: the support in local coordinates, kept for the residual
+/// passes.
 #[derive(Debug, Default)]
 pub struct JetScratch {
-    rows: Vec<Row>,
+    locals: Vec<Local>,
 }
 
-/// One equation of the fit, in scaled coordinates.
+/// One sample of the support in scaled local coordinates `(u, v, z) = (q − x)·(t1, t2, n)/ρ`.
 #[derive(Clone, Copy, Debug)]
-enum Row {
-    /// `P(u, v) = z` with weight `w`.
-    Height { phi: [f64; 15], z: f64, w: f64 },
-    /// `∂P/∂u = slope` (or `∂P/∂v`) with weight `w`.
-    Slope { phi: [f64; 15], slope: f64, w: f64 },
+struct Local {
+    u: f64,
+    v: f64,
+    z: f64,
+    /// The weight ω of its equations.
+    w: f64,
+    /// The slopes `(∂P/∂u, ∂P/∂v)` its normal asks for, when it enters the fit.
+    slope: Option<[f64; 2]>,
+    /// The monomials `φ(u, v)` of degree ≤ 4, kept for the residual passes.
+    p: [f64; 15],
 }
 
-/// Calls `f` with every equation the samples within the support give.
-fn for_each_row(
+/// Fills `locals` with the samples within the support whose normal faces the frame.
+fn local_samples(
     samples: &[Sample],
     centre: &Point,
     frame: &(Vector, Vector, Vector),
-    inv_r2: f64,
     radius: f64,
     normals: NormalData,
-    mut f: impl FnMut(Row),
+    locals: &mut Vec<Local>,
 ) {
     let (t1, t2, n) = frame;
+    let inv_r2 = 1.0 / (radius * radius);
+    locals.clear();
     for sample in samples {
         let d = sample.point - centre;
         let s = d.norm_squared() * inv_r2;
@@ -412,32 +348,155 @@ fn for_each_row(
         if !(c > 0.0) {
             continue;
         }
-        let w = (1.0 - s) * (1.0 - s) * (1.0 - s);
-        // Scaled coordinates keep the normal equations O(1) whatever the units.
-        let (u, v, z) = (d.dot(t1) / radius, d.dot(t2) / radius, d.dot(n) / radius);
-        f(Row::Height {
-            phi: monomials(u, v),
-            z,
-            w,
-        });
-        if normals == NormalData::Slopes {
+        let slope = (normals == NormalData::Slopes && c > 0.5).then(|| {
             let nu = &sample.normal;
             let (a, b) = (nu.dot(t1), nu.dot(t2));
-            if c > 0.5 {
-                let (du, dv) = monomial_gradients(u, v);
-                f(Row::Slope {
-                    phi: du,
-                    slope: -a / c,
-                    w,
-                });
-                f(Row::Slope {
-                    phi: dv,
-                    slope: -b / c,
-                    w,
-                });
+            [-a / c, -b / c]
+        });
+        // Scaled coordinates keep the normal equations O(1) whatever the units.
+        locals.push(Local {
+            u: d.dot(t1) / radius,
+            v: d.dot(t2) / radius,
+            z: d.dot(n) / radius,
+            w: (1.0 - s) * (1.0 - s) * (1.0 - s),
+            slope,
+            p: [0.0; 15],
+        });
+    }
+}
+
+/// Index of `u^p v^q` among the monomials ordered by total degree (the order of
+/// [`MONOMIALS`], continued to higher degrees).
+const fn moment(p: i32, q: i32) -> usize {
+    let d = (p + q) as usize;
+    d * (d + 1) / 2 + q as usize
+}
+
+/// The exponents `(p, q)` of the monomials of degree ≤ 8 in the order of [`moment`].
+const EXPONENTS: [(usize, usize); 45] = {
+    let mut t = [(0, 0); 45];
+    let mut d = 0;
+    while d <= 8 {
+        let mut q = 0;
+        while q <= d {
+            t[d * (d + 1) / 2 + q] = (d - q, q);
+            q += 1;
+        }
+        d += 1;
+    }
+    t
+};
+
+/// The first `K` monomials `u^p v^q` in the order of [`moment`], each a product of two powers
+/// (independent products, not a chain).
+fn powers<const K: usize>(u: f64, v: f64) -> [f64; K] {
+    let (mut up, mut vp) = ([1.0; 9], [1.0; 9]);
+    for i in 1..9 {
+        up[i] = up[i - 1] * u;
+        vp[i] = vp[i - 1] * v;
+    }
+    std::array::from_fn(|k| {
+        let (p, q) = EXPONENTS[k];
+        up[p] * vp[q]
+    })
+}
+
+/// Weighted moments of the support. A product of two monomials is a monomial, so every entry
+/// of the normal equations is one of these sums: 45 per sample (degree ≤ 8) build the 120
+/// distinct entries of each 15 × 15 matrix, and the slopes' matrices reuse them.
+struct Moments {
+    /// `Σ ω u^p v^q` over the heights, degree ≤ 8.
+    h: [f64; 45],
+    /// `Σ ω² u^p v^q` over the heights, for the variance of the coefficients.
+    h2: [f64; 45],
+    /// `Σ ω z u^p v^q`, degree ≤ 4.
+    hz: [f64; 15],
+    /// `Σ ω u^p v^q` over the samples with slopes, degree ≤ 6.
+    s: [f64; 28],
+    /// `Σ ω² u^p v^q` over the samples with slopes.
+    s2: [f64; 28],
+    /// `Σ ω s_u u^p v^q` and `Σ ω s_v u^p v^q`, degree ≤ 3.
+    su: [f64; 10],
+    sv: [f64; 10],
+    /// Samples, and samples with slopes.
+    heights: usize,
+    slope_samples: usize,
+    /// `Σ ω` over the height equations, and over the slope equations (two per sample).
+    weight_h: f64,
+    weight_s: f64,
+}
+
+impl Moments {
+    /// The moments of `locals`, whose monomials it fills in.
+    fn of(locals: &mut [Local]) -> Self {
+        let mut m = Self {
+            h: [0.0; 45],
+            h2: [0.0; 45],
+            hz: [0.0; 15],
+            s: [0.0; 28],
+            s2: [0.0; 28],
+            su: [0.0; 10],
+            sv: [0.0; 10],
+            heights: locals.len(),
+            slope_samples: 0,
+            weight_h: 0.0,
+            weight_s: 0.0,
+        };
+        for l in locals {
+            let p = powers::<45>(l.u, l.v);
+            l.p.copy_from_slice(&p[..15]);
+            let (w, w2) = (l.w, l.w * l.w);
+            for ((h, h2), &p) in m.h.iter_mut().zip(&mut m.h2).zip(&p) {
+                *h += w * p;
+                *h2 += w2 * p;
+            }
+            let wz = w * l.z;
+            for (hz, &p) in m.hz.iter_mut().zip(&p) {
+                *hz += wz * p;
+            }
+            m.weight_h += w;
+            if let Some([a, b]) = l.slope {
+                for ((s, s2), &p) in m.s.iter_mut().zip(&mut m.s2).zip(&p) {
+                    *s += w * p;
+                    *s2 += w2 * p;
+                }
+                let (wa, wb) = (w * a, w * b);
+                for ((su, sv), &p) in m.su.iter_mut().zip(&mut m.sv).zip(&p) {
+                    *su += wa * p;
+                    *sv += wb * p;
+                }
+                m.weight_s += 2.0 * w;
+                m.slope_samples += 1;
             }
         }
+        m
     }
+
+    /// `Σ ω z φ`.
+    fn height_rhs<const N: usize>(&self) -> [f64; N] {
+        std::array::from_fn(|a| self.hz[a])
+    }
+
+    /// `Σ ω (s_u ∂_u φ + s_v ∂_v φ)`.
+    fn slope_rhs<const N: usize>(&self) -> [f64; N] {
+        std::array::from_fn(|a| {
+            let (fu, iu, fv, iv) = DERIVATIVE[a];
+            fu * self.su[iu] + fv * self.sv[iv]
+        })
+    }
+}
+
+/// The coefficients of `∂_u` and `∂_v` of `Σ_k x_k φ_k` on the monomials of degree ≤ 3
+/// (`x` has 15 entries, zero past the fitted ones).
+fn gradient_coefficients<T: Copy + Default + std::ops::Mul<f64, Output = T>>(
+    x: &[T; 15],
+) -> ([T; 10], [T; 10]) {
+    let (mut du, mut dv) = ([T::default(); 10], [T::default(); 10]);
+    for (k, &(i, j)) in MONOMIALS.iter().enumerate().take(10) {
+        du[k] = x[moment(i + 1, j)] * f64::from(i + 1);
+        dv[k] = x[moment(i, j + 1)] * f64::from(j + 1);
+    }
+    (du, dv)
 }
 
 /// A solved fit in scaled coordinates.
@@ -447,6 +506,19 @@ struct Solution {
     height_noise: f64,
     /// Covariance of (c20, c11, c02).
     covariance: Matrix,
+}
+
+/// Equations per coefficient for a fit to enter the ladder's stopping rules (see [`trusted`]).
+pub const TRUSTED_EQUATIONS_PER_COEFFICIENT: f64 = 3.0;
+
+/// Whether a fit has enough equations for its own noise estimate to be trusted by the ladder's
+/// stopping rules: 3 per coefficient. The weight `(1 − d²/ρ²)³` leaves an effective sample
+/// size `(Σω)²/Σω²` of 7/16 of the count on a uniform disc, so at 1.5 equations per coefficient
+/// (enough to determine the fit) the weighted residuals have almost no degrees of freedom left,
+/// σ̂ is unreliable, and one wild fit would stop the climb. Such a fit stays a candidate for
+/// the final choice, where on clean data its small bias wins.
+pub fn trusted(fit: &JetFit) -> bool {
+    fit.equations as f64 >= TRUSTED_EQUATIONS_PER_COEFFICIENT * coefficient_count(fit.degree) as f64
 }
 
 /// Equations (heights and slopes) per coefficient a degree needs.
@@ -460,88 +532,154 @@ pub const SD_FLOOR: f64 = 1e-8;
 /// noise estimates is unreliable beyond this.
 const MAX_SLOPE_WEIGHT: f64 = 1e4;
 
+/// A square matrix as rows, for the small dense algebra of [`solve`].
+type Square<const N: usize> = [[f64; N]; N];
+
+/// `∂_u φ_a = f_u φ[i_u]` and `∂_v φ_a = f_v φ[i_v]` for each monomial `a` (a factor 0 where
+/// the monomial has no `u`, or no `v`).
+const DERIVATIVE: [(f64, usize, f64, usize); 15] = {
+    let mut t = [(0.0, 0, 0.0, 0); 15];
+    let mut a = 0;
+    while a < 15 {
+        let (i, j) = MONOMIALS[a];
+        if i > 0 {
+            t[a].0 = i as f64;
+            t[a].1 = moment(i - 1, j);
+        }
+        if j > 0 {
+            t[a].2 = j as f64;
+            t[a].3 = moment(i, j - 1);
+        }
+        a += 1;
+    }
+    t
+};
+
+/// `(i_a + i_b, j_a + j_b)` as a [`moment`] index, for every pair of monomials: the entry
+/// `(a, b)` of the heights' normal matrix.
+const PRODUCT: [[usize; 15]; 15] = {
+    let mut t = [[0; 15]; 15];
+    let mut a = 0;
+    while a < 15 {
+        let mut b = 0;
+        while b < 15 {
+            t[a][b] = moment(
+                MONOMIALS[a].0 + MONOMIALS[b].0,
+                MONOMIALS[a].1 + MONOMIALS[b].1,
+            );
+            b += 1;
+        }
+        a += 1;
+    }
+    t
+};
+
+/// The entry `(a, b)` of the slopes' normal matrix as `f_u μ[i_u] + f_v μ[i_v]`: the moments
+/// of `∂_u φ_a ∂_u φ_b = i_a i_b u^(i_a+i_b−2) v^(j_a+j_b)` and of its `v` counterpart
+/// (a factor 0 where a monomial has no `u`, or no `v`).
+const SLOPE_PRODUCT: [[(f64, usize, f64, usize); 15]; 15] = {
+    let mut t = [[(0.0, 0, 0.0, 0); 15]; 15];
+    let mut a = 0;
+    while a < 15 {
+        let mut b = 0;
+        while b < 15 {
+            let ((ia, ja), (ib, jb)) = (MONOMIALS[a], MONOMIALS[b]);
+            if ia > 0 && ib > 0 {
+                t[a][b].0 = (ia * ib) as f64;
+                t[a][b].1 = moment(ia + ib - 2, ja + jb);
+            }
+            if ja > 0 && jb > 0 {
+                t[a][b].2 = (ja * jb) as f64;
+                t[a][b].3 = moment(ia + ib, ja + jb - 2);
+            }
+            b += 1;
+        }
+        a += 1;
+    }
+    t
+};
+
+/// `Σ ω φ φᵀ` of the heights from their moments `mu`.
+fn height_matrix<const N: usize>(mu: &[f64]) -> Square<N> {
+    std::array::from_fn(|a| std::array::from_fn(|b| mu[PRODUCT[a][b]]))
+}
+
+/// `Σ ω (∂_u φ ∂_u φᵀ + ∂_v φ ∂_v φᵀ)` of the slopes from their moments `mu`.
+fn slope_matrix<const N: usize>(mu: &[f64]) -> Square<N> {
+    std::array::from_fn(|a| {
+        std::array::from_fn(|b| {
+            let (fu, iu, fv, iv) = SLOPE_PRODUCT[a][b];
+            fu * mu[iu] + fv * mu[iv]
+        })
+    })
+}
+
 /// Solves the leading `N × N` block, with the slope equations weighted by the ratio of the
 /// two estimated noise variances (one re-weighting from an equal start).
 fn solve<const N: usize>(
-    rows: &[Row],
+    locals: &[Local],
     normals: NormalData,
-    heights: &Equations,
-    slopes: &Equations,
+    moments: &Moments,
 ) -> Option<Solution> {
-    let block = |m: &SMatrix<f64, 15, 15>| -> SMatrix<f64, N, N> {
-        m.fixed_view::<N, N>(0, 0).into_owned()
-    };
     let (hp, hp2, sp, sp2) = (
-        block(&heights.m),
-        block(&heights.m2),
-        block(&slopes.m),
-        block(&slopes.m2),
+        height_matrix::<N>(&moments.h),
+        height_matrix::<N>(&moments.h2),
+        slope_matrix::<N>(&moments.s),
+        slope_matrix::<N>(&moments.s2),
     );
-    let (rp, rs) = (
-        heights.rhs.fixed_view::<N, 1>(0, 0).into_owned(),
-        slopes.rhs.fixed_view::<N, 1>(0, 0).into_owned(),
-    );
-    let use_slopes = normals == NormalData::Slopes && slopes.weight > 0.0;
+    let (rp, rs) = (moments.height_rhs::<N>(), moments.slope_rhs::<N>());
+    let (weight_h, weight_s) = (moments.weight_h, moments.weight_s);
+    let use_slopes = normals == NormalData::Slopes && weight_s > 0.0;
     let mut lambda = if use_slopes { 1.0 } else { 0.0 };
     let rounds = if use_slopes { 2 } else { 1 };
     let mut result = None;
     for round in 0..rounds {
         // The covariance is kept from the last round only: its sandwich is formed there.
-        let last = round + 1 == rounds;
-        let a = hp + sp * lambda;
-        let chol = Cholesky::new(a)?;
-        // A pivot far below the diagonal's scale means the basis is not determined by the
-        // samples (too few, or on a line): treat as singular rather than fit noise.
-        let l = chol.l_dirty();
-        let max_diag = (0..N).map(|i| a[(i, i)]).fold(0.0f64, f64::max);
-        if (0..N).any(|i| !(l[(i, i)] * l[(i, i)] > 1e-10 * max_diag)) {
-            return None;
-        }
-        let solved = chol.solve(&(rp + rs * lambda));
+        let sandwich = use_slopes && round + 1 == rounds;
+        let a: Square<N> =
+            std::array::from_fn(|i| std::array::from_fn(|j| hp[i][j] + sp[i][j] * lambda));
+        let rhs: [f64; N] = std::array::from_fn(|i| rp[i] + rs[i] * lambda);
+        let factor = cholesky(&a)?;
+        let inv = factor.inverse();
         let mut c = [0.0; 15];
-        c[..N].copy_from_slice(solved.as_slice());
-        let inv = chol.inverse();
+        c[..N].copy_from_slice(&factor.solve(&rhs));
+        let (cu, cv) = gradient_coefficients(&c);
+        // The columns of M⁻¹ that give (c20, c11, c02), as rows per coefficient.
+        let mut sel = [Vector::zeros(); 15];
+        for (k, s) in sel.iter_mut().enumerate().take(N) {
+            *s = Vector::new(inv[k][A20], inv[k][A11], inv[k][A02]);
+        }
+        let (sel_u, sel_v) = gradient_coefficients(&sel);
         // Weighted residuals from the samples again (yᵀΩy − cᵀAᵀΩy loses the digits of a
         // small residual).
         let (mut rss_h, mut rss_s) = (0.0, 0.0);
         // With slopes, each sample's height and slope errors share its displacement: the
         // covariance is the cluster-robust sandwich M⁻¹ (Σ_samples g gᵀ) M⁻¹, g = Σ ω r φ over
-        // the sample's rows (a height row opens each sample).
-        let mut meat = SMatrix::<f64, N, N>::zeros();
-        let mut g = SVector::<f64, N>::zeros();
-        let mut samples = 0usize;
-        for row in rows {
-            let (phi, y, w) = match *row {
-                Row::Height { phi, z, w } => {
-                    if samples > 0 && use_slopes && last {
-                        meat += g * g.transpose();
-                    }
-                    g.fill(0.0);
-                    samples += 1;
-                    (phi, z, w)
-                }
-                Row::Slope { phi, slope, w } => (phi, slope, w * lambda),
-            };
-            let p: f64 = (0..N).map(|k| c[k] * phi[k]).sum();
-            let r = y - p;
-            match row {
-                Row::Height { .. } => rss_h += w * r * r,
-                Row::Slope { .. } => rss_s += w / lambda * r * r,
+        // the sample's equations; only its (c20, c11, c02) block is formed.
+        let mut meat = Matrix::zeros();
+        for l in locals {
+            let p = &l.p;
+            let r = l.z - dot(&c, p);
+            rss_h += l.w * r * r;
+            let mut g = Vector::zeros();
+            if sandwich {
+                g = combine(&sel, p) * (l.w * r);
             }
-            if use_slopes && last {
-                for k in 0..N {
-                    g[k] += w * r * phi[k];
+            if let (true, Some([a, b])) = (use_slopes, l.slope) {
+                let (ru, rv) = (a - dot(&cu, p), b - dot(&cv, p));
+                rss_s += l.w * (ru * ru + rv * rv);
+                if sandwich {
+                    g += (combine(&sel_u, p) * ru + combine(&sel_v, p) * rv) * (l.w * lambda);
                 }
             }
-        }
-        if use_slopes && last {
-            meat += g * g.transpose();
+            if sandwich {
+                meat += g * g.transpose();
+            }
         }
         // Degrees of freedom left to each kind of data: Σω − its share of the hat matrix's
         // trace (exact for one kind of data with independent noise).
-        // tr(M⁻¹M₂) as the Frobenius product (both symmetric): 225 products, not 3375.
-        let dof_h = heights.weight - inv.dot(&hp2);
-        let dof_s = slopes.weight - lambda * inv.dot(&sp2);
+        let dof_h = weight_h - trace_product(&inv, &hp2);
+        let dof_s = weight_s - lambda * trace_product(&inv, &sp2);
         if !(dof_h > 0.0) {
             return None;
         }
@@ -551,18 +689,27 @@ fn solve<const N: usize>(
         } else {
             0.0
         };
-        let sel = inv.fixed_columns::<3>(A20).into_owned();
-        let cov_m = if use_slopes && samples > N {
+        let samples = moments.heights;
+        let covariance = if round + 1 < rounds {
+            // This round only weighs the slopes for the next.
+            Matrix::zeros()
+        } else if sandwich && samples > N {
             // Small-sample factor n/(n − p) of the sandwich.
             meat * (samples as f64 / (samples - N) as f64)
         } else {
-            hp2 * var_h + sp2 * (lambda * lambda * var_s)
+            // selᵀ (M₂ʰ σ̂ₕ² + M₂ˢ λ² σ̂ₛ²) sel.
+            let var_s = lambda * lambda * var_s;
+            (0..N).fold(Matrix::zeros(), |cov, j| {
+                let column: Vector = (0..N)
+                    .map(|i| sel[i] * (hp2[i][j] * var_h + sp2[i][j] * var_s))
+                    .sum();
+                cov + column * sel[j].transpose()
+            })
         };
-        let cov = sel.transpose() * cov_m * sel;
         result = Some(Solution {
             c,
             height_noise: var_h.sqrt(),
-            covariance: Matrix::from_fn(|i, j| cov[(i, j)]),
+            covariance,
         });
         if use_slopes {
             lambda = if var_s > 0.0 {
@@ -575,67 +722,96 @@ fn solve<const N: usize>(
     result
 }
 
-/// The monomials `u^i v^j` in [`MONOMIALS`] order.
-fn monomials(u: f64, v: f64) -> [f64; 15] {
-    let (u2, v2) = (u * u, v * v);
-    let (u3, v3) = (u2 * u, v2 * v);
-    [
-        1.0,
-        u,
-        v,
-        u2,
-        u * v,
-        v2,
-        u3,
-        u2 * v,
-        u * v2,
-        v3,
-        u2 * u2,
-        u3 * v,
-        u2 * v2,
-        u * v3,
-        v2 * v2,
-    ]
+/// `Σ_k x_k p_k` over the first `x.len()` monomials.
+fn dot(x: &[f64], p: &[f64; 15]) -> f64 {
+    x.iter().zip(p).map(|(x, p)| x * p).sum()
 }
 
-/// `(∂/∂u, ∂/∂v)` of the monomials, in [`MONOMIALS`] order.
-fn monomial_gradients(u: f64, v: f64) -> ([f64; 15], [f64; 15]) {
-    let (u2, v2, uv) = (u * u, v * v, u * v);
-    let du = [
-        0.0,
-        1.0,
-        0.0,
-        2.0 * u,
-        v,
-        0.0,
-        3.0 * u2,
-        2.0 * uv,
-        v2,
-        0.0,
-        4.0 * u2 * u,
-        3.0 * u2 * v,
-        2.0 * u * v2,
-        v2 * v,
-        0.0,
-    ];
-    let dv = [
-        0.0,
-        0.0,
-        1.0,
-        0.0,
-        u,
-        2.0 * v,
-        0.0,
-        u2,
-        2.0 * uv,
-        3.0 * v2,
-        0.0,
-        u2 * u,
-        2.0 * u2 * v,
-        3.0 * u * v2,
-        4.0 * v2 * v,
-    ];
-    (du, dv)
+/// `Σ_k s_k p_k` for 3-vectors `s_k`.
+fn combine(s: &[Vector], p: &[f64; 15]) -> Vector {
+    s.iter()
+        .zip(p)
+        .fold(Vector::zeros(), |acc, (s, &p)| acc + s * p)
+}
+
+/// `tr(A B)` of two symmetric matrices, as their Frobenius product (N² products, not N³).
+fn trace_product<const N: usize>(a: &Square<N>, b: &Square<N>) -> f64 {
+    a.iter()
+        .zip(b)
+        .map(|(a, b)| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>())
+        .sum()
+}
+
+/// A Cholesky factor `L` (`LLᵀ = A`) with the reciprocals of its diagonal.
+struct Factor<const N: usize> {
+    l: Square<N>,
+    inv_diag: [f64; N],
+}
+
+/// The lower Cholesky factor of the symmetric `a`, or `None` when a squared pivot falls below
+/// `1e-10` of the largest diagonal entry: the basis is then not determined by the samples (too
+/// few, or on a line), and fitting it would fit noise.
+fn cholesky<const N: usize>(a: &Square<N>) -> Option<Factor<N>> {
+    let max_diag = (0..N).map(|i| a[i][i]).fold(0.0f64, f64::max);
+    let mut l = [[0.0; N]; N];
+    let mut inv_diag = [0.0; N];
+    for i in 0..N {
+        for j in 0..i {
+            l[i][j] = (a[i][j] - dot_prefix(&l[i], &l[j], j)) * inv_diag[j];
+        }
+        let s = a[i][i] - dot_prefix(&l[i], &l[i], i);
+        if !(s > 1e-10 * max_diag) {
+            return None;
+        }
+        l[i][i] = s.sqrt();
+        inv_diag[i] = 1.0 / l[i][i];
+    }
+    Some(Factor { l, inv_diag })
+}
+
+/// `Σ_{k<n} x_k y_k`.
+fn dot_prefix(x: &[f64], y: &[f64], n: usize) -> f64 {
+    x[..n].iter().zip(&y[..n]).map(|(x, y)| x * y).sum()
+}
+
+impl<const N: usize> Factor<N> {
+    /// `x` with `LLᵀ x = b`, by forward and back substitution.
+    fn solve(&self, b: &[f64; N]) -> [f64; N] {
+        let (l, d) = (&self.l, &self.inv_diag);
+        let mut y = [0.0; N];
+        for i in 0..N {
+            y[i] = (b[i] - dot_prefix(&l[i], &y, i)) * d[i];
+        }
+        let mut x = [0.0; N];
+        for i in (0..N).rev() {
+            let s: f64 = (i + 1..N).map(|k| l[k][i] * x[k]).sum();
+            x[i] = (y[i] - s) * d[i];
+        }
+        x
+    }
+
+    /// `A⁻¹ = L⁻ᵀ L⁻¹`.
+    fn inverse(&self) -> Square<N> {
+        let (l, d) = (&self.l, &self.inv_diag);
+        // L⁻¹ stored transposed (row j holds column j), so both loops below run along rows.
+        let mut lit = [[0.0; N]; N];
+        for j in 0..N {
+            lit[j][j] = d[j];
+            for i in j + 1..N {
+                let s: f64 = (j..i).map(|k| l[i][k] * lit[j][k]).sum();
+                lit[j][i] = -s * d[i];
+            }
+        }
+        let mut inv = [[0.0; N]; N];
+        for i in 0..N {
+            for j in 0..=i {
+                let s: f64 = (i..N).map(|k| lit[i][k] * lit[j][k]).sum();
+                inv[i][j] = s;
+                inv[j][i] = s;
+            }
+        }
+        inv
+    }
 }
 
 /// Curvature of a fit at its foot point, with the predicted standard deviations.

@@ -341,13 +341,29 @@ impl Evaluator<'_> {
         let mut fallback: Option<JetPoint> = None;
         self.ladder.clear();
         let mut agree_last = true;
+        // Full-degree fits with too few equations to trust their own noise estimate: candidates
+        // for the choice at the front of the ladder, outside its stopping rules.
+        let mut early = 0;
         let mut failure = PointStatus::NoNeighbours;
         let (mut lo, mut hi) = ([f64::NEG_INFINITY; 2], [f64::INFINITY; 2]);
-        for j in 0..config.scales.max(1) {
-            let radius = config.radius * h * std::f64::consts::SQRT_2.powi(j as i32);
-            self.gather(&local, Some(radius));
-            if self.support.len() < 6 {
-                failure = if self.support.is_empty() {
+        let scales = config.scales.max(1);
+        let radius_of = |j: usize| config.radius * h * std::f64::consts::SQRT_2.powi(j as i32);
+        // The support is gathered for two scales at a time; the fit keeps its own radius.
+        let mut gathered = 0.0;
+        for j in 0..scales {
+            let radius = radius_of(j);
+            if radius > gathered {
+                gathered = radius_of((j + 1).min(scales - 1));
+                self.gather(&local, Some(gathered));
+            }
+            let r2 = radius * radius;
+            let inside = self
+                .support
+                .iter()
+                .filter(|s| (s.point - local).norm_squared() <= r2)
+                .count();
+            if inside < 6 {
+                failure = if inside == 0 {
                     PointStatus::NoNeighbours
                 } else {
                     PointStatus::TooFewNeighbours
@@ -398,6 +414,11 @@ impl Evaluator<'_> {
                 fallback = fallback.or(Some(p));
                 continue;
             }
+            if best.is_none() && !jet::trusted(&fit) {
+                self.ladder.push(p);
+                early += 1;
+                continue;
+            }
             let k = [p.curvature.k1, p.curvature.k2];
             let mut agree = true;
             for i in 0..2 {
@@ -411,13 +432,15 @@ impl Evaluator<'_> {
                 break;
             }
             best = Some(p);
-            if jet::past_optimum(&self.ladder) {
+            if jet::past_optimum(&self.ladder[early..]) {
                 break;
             }
         }
         if best.is_some() {
             let accepted = self.ladder.len() - usize::from(!agree_last);
             best = Some(jet::choose_scale(&self.ladder, accepted));
+        } else if early > 0 {
+            best = Some(jet::choose_scale(&self.ladder, early));
         }
         best.or(fallback).ok_or(failure)
     }

@@ -47,6 +47,7 @@ fn main() -> Result<(), Box<dyn Error>> {
     let cloud = PointCloud {
         points: normals.iter().map(|v| v.map(|c| 2.0 * c)).collect(),
         normals: Some(normals),
+        ..PointCloud::default()
     };
     println!("{n} points");
 
@@ -91,9 +92,11 @@ fn main() -> Result<(), Box<dyn Error>> {
         write_ply(&table_path, &columns, PlyFormat::BinaryLittleEndian)
     })
     .0?;
-    timed("read 17-column PLY (skips 11 columns)", &table_path, || {
-        read_point_cloud(&table_path)
-    })
+    timed(
+        "read 17-column PLY (11 columns as attributes)",
+        &table_path,
+        || read_point_cloud(&table_path),
+    )
     .0?;
     // The same without the file system (no fsync, no page cache), to separate the costs.
     let start = Instant::now();
@@ -117,6 +120,35 @@ fn main() -> Result<(), Box<dyn Error>> {
         read_point_cloud(&ascii_path)
     })
     .0?;
+    let laz_path = dir.path().join("table.laz");
+    timed("write LAZ 17 columns (extra bytes)", &laz_path, || {
+        mls_io::write_las(&laz_path, &columns, true)
+    })
+    .0?;
+    let (read, _) = timed(
+        "read 17-column LAZ (format 6 + extra bytes)",
+        &laz_path,
+        || read_point_cloud(&laz_path),
+    );
+    let read = read?;
+    let las_path = dir.path().join("table.las");
+    timed(
+        "write LAS from LAZ input (all dimensions)",
+        &las_path,
+        || {
+            mls_io::write_point_cloud_as_with(
+                &las_path,
+                mls_io::FileFormat::Las,
+                &read.columns(),
+                &mls_io::WriteOptions {
+                    las: read.las.as_ref(),
+                    ..mls_io::WriteOptions::default()
+                },
+            )
+        },
+    )
+    .0?;
+    timed("read that LAS", &las_path, || read_point_cloud(&las_path)).0?;
     let csv_path = dir.path().join("table.csv");
     timed("write_csv 17 columns", &csv_path, || {
         write_csv(&csv_path, &columns)

@@ -17,9 +17,10 @@ pub const UNIT_TOLERANCE: f64 = 1e-3;
 /// such as `x,y,z,nx,ny,nz,intensity`.
 ///
 /// Names are case-insensitive. `x`, `y`, `z` (required) and `nx`, `ny`, `nz` (all three or
-/// none) are read; any other name (`intensity`, `r`, `g`, `b`, `_` …) marks a column that is
-/// skipped without being parsed. Each name is letters, digits and `_`, and the six read names
-/// appear at most once.
+/// none) are the geometry; any other name (`intensity`, `r`, `g`, `b` …) names an attribute,
+/// carried to the output under that name, and `_` marks a column that is skipped without
+/// being parsed. Each name is letters, digits and `_`, and every name but `_` appears at most
+/// once.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct ColumnNames(Vec<String>);
 
@@ -40,7 +41,7 @@ impl ColumnNames {
                     i + 1
                 ));
             }
-            if SLOT_NAMES.contains(&name.as_str()) && names[..i].contains(name) {
+            if name != "_" && names[..i].contains(name) {
                 return Err(format!("column `{name}` named twice in `{description}`"));
             }
         }
@@ -153,7 +154,9 @@ mod tests {
             let err = ColumnNames::parse(bad).unwrap_err();
             assert!(err.contains(why), "{bad}: {err}");
         }
-        // Ignored names may repeat.
+        // Skipped columns may repeat; attributes may not.
         assert!(ColumnNames::parse("x,y,z,_,_").is_ok());
+        let err = ColumnNames::parse("x,y,z,r,r").unwrap_err();
+        assert!(err.contains("`r` named twice"), "{err}");
     }
 }

@@ -1,24 +1,30 @@
 //! Point-cloud readers and writers for mls-curvature: PLY (ASCII and binary, either byte
 //! order), whitespace-separated XYZ/TXT/PTS, CSV with a header, and LAS/LAZ (through the
-//! `las` crate; points only on input, computed columns as LAS extra bytes on output).
+//! `las` crate; computed columns as LAS extra bytes on output).
 //!
-//! Readers return a [`PointCloud`] of points and, when the file has all of `nx`, `ny`, `nz`,
-//! normals exactly as stored (not normalised: the caller validates them). A headerless text
-//! file has no names, so its columns 4–6 are taken as normals only when they are unit vectors
-//! on every row ([`read_xyz_with`]); [`ColumnNames`] (`--columns`) names the columns instead,
-//! and the `_with` readers return notes on the columns ignored or not taken as normals. Every coordinate and
-//! normal component must be finite. Errors ([`ReadError`]) are one line starting with the file
+//! Readers return a [`PointCloud`] of points, when the file has all of `nx`, `ny`, `nz`,
+//! normals exactly as stored (not normalised: the caller validates them), and every other
+//! per-point value as an [`Attribute`] in its stored type (PLY properties, text columns, LAS
+//! dimensions and extra bytes). A headerless text file has no names, so its columns 4–6 are
+//! taken as normals only when they are unit vectors on every row ([`read_xyz_with`]);
+//! [`ColumnNames`] (`--columns`) names the columns instead, and the `_with` readers return
+//! notes on the columns dropped or not taken as normals. Every coordinate and normal
+//! component must be finite. Errors ([`ReadError`]) are one line starting with the file
 //! name and say where: the line and field for text, the byte offset and property for binary
 //! PLY. An empty cloud is not an error; the caller decides.
 //!
 //! Writers take a table of named [`Column`]s (floats as `f64`, integers such as a status code
-//! as `i32`) and write it atomically as PLY, CSV, XYZ or LAS/LAZ; floats round-trip exactly in
+//! as `i32`, attributes in their own types) and write it atomically as PLY, CSV, XYZ or LAS/LAZ; floats round-trip exactly in
 //! every format (LAS coordinates excepted: they are stored on the header's grid).
 //!
 //! ```
 //! use mls_io::{PlyFormat, PointCloud, read_ply, write_ply_to};
 //!
-//! let cloud = PointCloud { points: vec![[0.0, 1.0, 2.5]], normals: Some(vec![[0.0, 0.0, 1.0]]) };
+//! let cloud = PointCloud {
+//!     points: vec![[0.0, 1.0, 2.5]],
+//!     normals: Some(vec![[0.0, 0.0, 1.0]]),
+//!     ..PointCloud::default()
+//! };
 //! let mut bytes = Vec::new();
 //! write_ply_to(&mut bytes, "memory", &cloud.columns(), PlyFormat::BinaryLittleEndian)?;
 //! assert_eq!(read_ply(&bytes[..], "memory")?, cloud);
@@ -30,6 +36,7 @@
 
 #![warn(missing_docs)]
 
+mod attributes;
 mod columns;
 mod error;
 mod las;
@@ -42,13 +49,15 @@ use std::fs::File;
 use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
 
+pub use attributes::{Attribute, AttributeData, AttributeType, rename_clashes};
 pub use columns::{ColumnNames, ReadOptions, UNIT_TOLERANCE};
 pub use error::{ReadError, WriteError};
+pub use las::LasTemplate;
 pub use text::{read_csv, read_csv_with, read_xyz, read_xyz_with};
 pub use write::{
-    Axis, Column, ColumnData, PlyFormat, write_csv, write_csv_to, write_las, write_ply,
-    write_ply_to, write_point_cloud, write_point_cloud_as, write_point_cloud_to, write_xyz,
-    write_xyz_to,
+    Axis, Column, ColumnData, PlyFormat, WriteOptions, write_csv, write_csv_to, write_las,
+    write_ply, write_ply_to, write_point_cloud, write_point_cloud_as, write_point_cloud_as_with,
+    write_point_cloud_to, write_point_cloud_to_with, write_xyz, write_xyz_to,
 };
 
 /// The fields the readers look for, in the order of the slots of a row.
@@ -58,7 +67,7 @@ const SLOT_NAMES: [&str; 6] = ["x", "y", "z", "nx", "ny", "nz"];
 /// count; memory beyond this grows only as points actually arrive.
 const MAX_PREALLOCATED: u64 = 1 << 20;
 
-/// Points, and normals if the file has them.
+/// Points, normals if the file has them, and the file's other per-point attributes.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct PointCloud {
     /// The points, in file order.
@@ -66,6 +75,11 @@ pub struct PointCloud {
     /// One normal per point, as stored in the file (not normalised, possibly zero), if the
     /// file has `nx`, `ny` and `nz`.
     pub normals: Option<Vec<[f64; 3]>>,
+    /// Every other per-point value of the file, in file order, each with one value per point:
+    /// PLY vertex properties, text columns, LAS dimensions and extra bytes.
+    pub attributes: Vec<Attribute>,
+    /// The layout of a LAS/LAZ input, for LAS output that keeps it.
+    pub las: Option<LasTemplate>,
 }
 
 impl PointCloud {
@@ -79,8 +93,8 @@ impl PointCloud {
         self.points.is_empty()
     }
 
-    /// Columns `x y z`, and `nx ny nz` if there are normals, borrowing the data, for the
-    /// writers.
+    /// Columns `x y z`, `nx ny nz` if there are normals, then the attributes, borrowing the
+    /// data, for the writers.
     pub fn columns(&self) -> Vec<Column<'_>> {
         let mut columns = vec![
             Column::component("x", &self.points, Axis::X),
@@ -94,6 +108,7 @@ impl PointCloud {
                 Column::component("nz", normals, Axis::Z),
             ]);
         }
+        columns.extend(self.attributes.iter().map(Column::attribute));
         columns
     }
 }
@@ -152,7 +167,7 @@ fn detect_format(path: &Path) -> Result<FileFormat, Option<String>> {
 
 /// Reads a point cloud, choosing the reader by the file's extension (case-insensitive):
 /// `.ply` ([`read_ply`]), `.xyz`, `.txt`, `.pts` ([`read_xyz`]), `.csv` ([`read_csv`]), or
-/// `.las`, `.laz` (points only: LAS has no normals; [`ReadError::Las`] names what is wrong).
+/// `.las`, `.laz` ([`ReadError::Las`] names what is wrong).
 /// The readers' notes are dropped; [`read_point_cloud_with`] returns them.
 ///
 /// # Errors
@@ -222,16 +237,10 @@ pub fn read_point_cloud_as_with(
     let size = opened.metadata().ok().map(|m| m.len());
     let reader = BufReader::with_capacity(1 << 20, opened);
     match format {
-        FileFormat::Ply => ply::read(reader, &file, size).map(|cloud| ReadOutcome {
-            cloud,
-            notes: Vec::new(),
-        }),
+        FileFormat::Ply => ply::read(reader, &file, size),
         FileFormat::Xyz => read_xyz_with(reader, &file, options),
         FileFormat::Csv => read_csv_with(reader, &file, options),
-        FileFormat::Las | FileFormat::Laz => las::read(reader, &file).map(|cloud| ReadOutcome {
-            cloud,
-            notes: Vec::new(),
-        }),
+        FileFormat::Las | FileFormat::Laz => las::read(reader, &file),
     }
 }
 
@@ -266,18 +275,10 @@ pub fn read_point_cloud_from_with(
                 file: name.to_owned(),
             })
         }
-        FileFormat::Ply => read_ply(reader, name).map(|cloud| ReadOutcome {
-            cloud,
-            notes: Vec::new(),
-        }),
+        FileFormat::Ply => ply::read(reader, name, None),
         FileFormat::Xyz => read_xyz_with(reader, name, options),
         FileFormat::Csv => read_csv_with(reader, name, options),
-        FileFormat::Las | FileFormat::Laz => {
-            las::read_stream(reader, name).map(|cloud| ReadOutcome {
-                cloud,
-                notes: Vec::new(),
-            })
-        }
+        FileFormat::Las | FileFormat::Laz => las::read_stream(reader, name),
     }
 }
 
@@ -296,7 +297,7 @@ pub fn read_point_cloud_from_with(
 /// and the property); for a binary body [`ReadError::Truncated`] and [`ReadError::Binary`]
 /// (naming the byte offset, element index and property); and [`ReadError::Io`].
 pub fn read_ply(reader: impl BufRead, name: &str) -> Result<PointCloud, ReadError> {
-    ply::read(reader, name, None)
+    ply::read(reader, name, None).map(|r| r.cloud)
 }
 
 /// Returns whether `a` and `b` name the same file, so a caller can refuse to overwrite its
@@ -336,6 +337,7 @@ fn canonical(path: &Path) -> Option<PathBuf> {
 struct CloudBuilder {
     points: Vec<[f64; 3]>,
     normals: Option<Vec<[f64; 3]>>,
+    attributes: Vec<Attribute>,
 }
 
 impl CloudBuilder {
@@ -343,10 +345,12 @@ impl CloudBuilder {
         Self {
             points: Vec::with_capacity(capacity),
             normals: has_normals.then(|| Vec::with_capacity(capacity)),
+            attributes: Vec::new(),
         }
     }
 
-    /// Adds one row of values in the order of [`SLOT_NAMES`].
+    /// Adds one row of values in the order of [`SLOT_NAMES`]; the row's attributes are
+    /// pushed to [`Self::attributes`] by the reader.
     fn push(&mut self, [x, y, z, nx, ny, nz]: [f64; 6]) {
         self.points.push([x, y, z]);
         if let Some(normals) = &mut self.normals {
@@ -358,6 +362,8 @@ impl CloudBuilder {
         PointCloud {
             points: self.points,
             normals: self.normals,
+            attributes: self.attributes,
+            las: None,
         }
     }
 }

@@ -3,6 +3,7 @@
 use std::borrow::Cow;
 use std::io::BufRead;
 
+use crate::attributes::{Attribute, TextColumn, usable_name};
 use crate::columns::{ReadOptions, UNIT_TOLERANCE};
 use crate::error::{ReadError, quoted};
 use crate::lines::{Lines, parse_finite};
@@ -24,10 +25,56 @@ pub fn read_xyz(reader: impl BufRead, name: &str) -> Result<PointCloud, ReadErro
 enum Role {
     /// A slot of [`SLOT_NAMES`], parsed strictly.
     Slot(usize),
-    /// Component `k` of the candidate normals (columns 4–6 without `--columns`).
-    Candidate(usize),
-    /// Skipped, not parsed.
+    /// Component `k` of the candidate normals (columns 4–6 without `--columns`), and
+    /// attribute column `i` if they turn out not to be normals.
+    Candidate(usize, usize),
+    /// Attribute column `i`.
+    Attribute(usize),
+    /// Skipped, not parsed (a column named `_`).
     Skip,
+}
+
+/// The attribute columns of a text file, by name, on their way to [`Attribute`]s.
+#[derive(Debug, Default)]
+struct TextAttributes(Vec<(String, usize, TextColumn)>);
+
+impl TextAttributes {
+    /// Adds a column for file column `column` (1-based); returns its index.
+    fn add(&mut self, name: String, column: usize) -> usize {
+        self.0.push((name, column, TextColumn::new()));
+        self.0.len() - 1
+    }
+
+    fn push(&mut self, i: usize, line: usize, token: &str) {
+        if let Some((_, _, c)) = self.0.get_mut(i) {
+            c.push(line, token);
+        }
+    }
+
+    /// The attributes, in column order, except those `skip` says; a column that holds
+    /// something other than numbers is dropped with a note.
+    fn finish(
+        self,
+        file: &str,
+        skip: impl Fn(usize) -> bool,
+        notes: &mut Vec<String>,
+    ) -> Vec<Attribute> {
+        let mut attributes = Vec::with_capacity(self.0.len());
+        for (i, (name, column, values)) in self.0.into_iter().enumerate() {
+            if skip(i) {
+                continue;
+            }
+            match values.finish() {
+                Ok(data) => attributes.push(Attribute { name, data }),
+                Err((line, token)) => notes.push(format!(
+                    "{file}: column {column} ({name}) is not carried to the output: line \
+                     {line} holds {}, not a number",
+                    quoted(&token)
+                )),
+            }
+        }
+        attributes
+    }
 }
 
 /// Whether columns 4–6 of a headerless file hold unit vectors on every row so far.
@@ -75,13 +122,19 @@ impl UnitCheck {
 /// later row must have as many. The columns are read by this rule:
 ///
 /// - With [`ReadOptions::columns`], by those names: the count must match, `x y z` and
-///   `nx ny nz` (if named) are parsed, every other column is skipped unparsed.
-/// - Otherwise columns 1–3 are `x y z` (fewer than 3 columns is an error). Columns 4–6, when
-///   present, are read as normals only if on **every** row they form a unit vector,
-///   `|length − 1| ≤` [`UNIT_TOLERANCE`], or are `0 0 0` or `nan nan nan` (a missing normal,
-///   read as `0 0 0`), with at least one unit row. Otherwise (colours `r g b` as 0–255 integers or 0–1 fractions, intensities,
-///   text) they are not normals, and a note names them, the first row that is not a unit
-///   vector, and the way to name the columns. Every other column is skipped, with a note.
+///   `nx ny nz` (if named) are geometry, columns named `_` are skipped unparsed, and every
+///   other column is an attribute of that name.
+/// - Otherwise columns 1–3 are `x y z` (fewer than 3 columns is an error). Columns 4–6 of a
+///   file of 6 columns or more are read as normals only if on **every** row they form a unit
+///   vector, `|length − 1| ≤` [`UNIT_TOLERANCE`], or are `0 0 0` or `nan nan nan` (a missing
+///   normal, read as `0 0 0`), with at least one unit row. Otherwise (colours `r g b` as
+///   0–255 integers or 0–1 fractions, intensities) they are not normals, and a note names
+///   them, the first row that is not a unit vector, and the way to name the columns. Every
+///   column that is not geometry is an attribute named `colN` for column `N`, with a note.
+///
+/// An attribute column is `int32` when every value is an integer in its range, `int64` when
+/// every value is an integer, `float64` otherwise; a column holding something other than
+/// numbers (text, an empty field) is dropped with a note naming the first such value.
 ///
 /// `name` is the display name used in errors and notes; each note is one line starting
 /// with it.
@@ -101,6 +154,7 @@ pub fn read_xyz_with(
     let mut first_row = true;
     let mut cloud = CloudBuilder::new(false, 0);
     let mut check: Option<UnitCheck> = None;
+    let mut attributes = TextAttributes::default();
     while let Some((line, text)) = lines.next_line(name)? {
         if text.trim_start().starts_with('#') {
             continue;
@@ -136,7 +190,13 @@ pub fn read_xyz_with(
                     columns
                         .slots()
                         .into_iter()
-                        .map(|s| s.map_or(Role::Skip, Role::Slot))
+                        .zip(columns.names())
+                        .enumerate()
+                        .map(|(c, (slot, name))| match slot {
+                            Some(slot) => Role::Slot(slot),
+                            None if name == "_" => Role::Skip,
+                            None => Role::Attribute(attributes.add(name.clone(), c + 1)),
+                        })
                         .collect()
                 }
                 None => {
@@ -144,10 +204,15 @@ pub fn read_xyz_with(
                         check = Some(UnitCheck::default());
                     }
                     (0..found)
-                        .map(|c| match c {
-                            0..3 => Role::Slot(c),
-                            3..6 => Role::Candidate(c - 3),
-                            _ => Role::Skip,
+                        .map(|c| {
+                            let name = format!("col{}", c + 1);
+                            match c {
+                                0..3 => Role::Slot(c),
+                                3..6 if found >= 6 => {
+                                    Role::Candidate(c - 3, attributes.add(name, c + 1))
+                                }
+                                _ => Role::Attribute(attributes.add(name, c + 1)),
+                            }
                         })
                         .collect()
                 }
@@ -180,7 +245,8 @@ pub fn read_xyz_with(
                         *dst = value;
                     }
                 }
-                Role::Candidate(k) => {
+                Role::Candidate(k, i) => {
+                    attributes.push(i, line, token);
                     if let Ok(v) = &mut candidate {
                         // NaN is let through: `nan nan nan` is a missing normal, as the
                         // curvature output writes for a failed point.
@@ -200,6 +266,7 @@ pub fn read_xyz_with(
                         }
                     }
                 }
+                Role::Attribute(i) => attributes.push(i, line, token),
                 Role::Skip => {}
             }
         }
@@ -211,35 +278,55 @@ pub fn read_xyz_with(
     let mut cloud = cloud.finish();
     let mut notes = Vec::new();
     let width = roles.len();
+    let mut normals_found = false;
     if options.columns.is_none() && width > 3 {
         if let Some(check) = check {
             match check.failed {
-                None if check.any_unit => cloud.normals = Some(check.normals),
+                None if check.any_unit => {
+                    cloud.normals = Some(check.normals);
+                    normals_found = true;
+                }
                 None => notes.push(format!(
-                    "{name}: columns 4-6 are 0 0 0 on every row; not read as normals"
+                    "{name}: columns 4-6 are 0 0 0 on every row; not read as normals but \
+                     carried as attributes col4 col5 col6"
                 )),
                 Some((line, why)) => notes.push(format!(
                     "{name}: columns 4-6 are not read as normals: normals must be unit vectors \
                      (|length - 1| <= {UNIT_TOLERANCE}) or 0 0 0 on every row, but line \
-                     {line}: {why}; the columns are ignored (name them with --columns, e.g. \
-                     x,y,z,r,g,b, or x,y,z,nx,ny,nz to read them as normals anyway)"
+                     {line}: {why}; they are carried as attributes col4 col5 col6 (name them \
+                     with --columns, e.g. x,y,z,r,g,b, or x,y,z,nx,ny,nz to read them as \
+                     normals anyway)"
                 )),
             }
         }
         // Columns 4-6 of a wider file are accounted for above.
-        let ignored_from = if width >= 6 { 7 } else { 4 };
-        if width >= ignored_from {
-            let range = if width == ignored_from {
-                format!("column {width} is")
+        let unnamed_from = if width >= 6 { 7 } else { 4 };
+        if width >= unnamed_from {
+            let range = if width == unnamed_from {
+                format!("column {width} is carried as attribute col{width}")
             } else {
-                format!("columns {ignored_from}-{width} are")
+                format!(
+                    "columns {unnamed_from}-{width} are carried as attributes \
+                     col{unnamed_from}-col{width}"
+                )
             };
             notes.push(format!(
-                "{name}: {width} columns; {range} ignored (name the columns with --columns to \
-                 choose)"
+                "{name}: {width} columns; {range} (name the columns with --columns)"
             ));
         }
     }
+    // The candidates' attribute columns, if they were taken as normals.
+    let mut normal_columns = [usize::MAX; 3];
+    if normals_found {
+        for role in &roles {
+            if let Role::Candidate(k, i) = *role
+                && let Some(slot) = normal_columns.get_mut(k)
+            {
+                *slot = i;
+            }
+        }
+    }
+    cloud.attributes = attributes.finish(name, |i| normal_columns.contains(&i), &mut notes);
     Ok(ReadOutcome { cloud, notes })
 }
 
@@ -247,7 +334,10 @@ pub fn read_xyz_with(
 ///
 /// The first non-blank line is the header. Names are matched case-insensitively after
 /// trimming whitespace and surrounding double quotes; `x`, `y`, `z` are required, `nx`, `ny`,
-/// `nz` are optional (all three or none) and any other column is ignored. Every row must have
+/// `nz` are optional (all three or none) and any other column is an attribute under its
+/// header name (case kept; each character other than an ASCII letter, digit, `_`, `-` or `.`
+/// replaced by `_`, `_2`, `_3` … appended to a repeated name, `colN` for an empty name in
+/// column `N`), typed as in [`read_xyz_with`]. Every row must have
 /// as many fields as the header. Fields may be double-quoted (with `""` for a quote inside),
 /// so text columns containing commas are skipped correctly; a quoted field may not span lines.
 /// Blank lines are ignored. A header without rows gives an empty cloud. `name` is the display
@@ -262,9 +352,10 @@ pub fn read_csv(reader: impl BufRead, name: &str) -> Result<PointCloud, ReadErro
 }
 
 /// Reads CSV as [`read_csv`] does; with [`ReadOptions::columns`], those names replace the
-/// header row's (which is still skipped, and must have as many fields). Normals named `nx`,
-/// `ny`, `nz` are taken as normals (a header, unlike a headerless file, says what they
-/// are). No notes yet: the outcome carries the cloud.
+/// header row's (which is still skipped, and must have as many fields); columns named `_`
+/// are skipped. Normals named `nx`, `ny`, `nz` are taken as normals (a header, unlike a
+/// headerless file, says what they are). The notes name the columns dropped because they
+/// hold something other than numbers.
 ///
 /// # Errors
 /// Those of [`read_csv`], and [`ReadError::ColumnsMismatch`] when the named columns do not
@@ -288,7 +379,7 @@ pub fn read_csv_with(
         message,
     };
     let mut names = CsvFields::new(header)
-        .map(|field| field.map(|f| f.trim().to_ascii_lowercase()))
+        .map(|field| field.map(|f| f.trim().to_owned()))
         .collect::<Result<Vec<_>, _>>()
         .map_err(|message| header_error(message.to_owned()))?;
     if let Some(columns) = &options.columns {
@@ -305,16 +396,29 @@ pub fn read_csv_with(
     let width = names.len();
     // For each column, the slot of SLOT_NAMES it fills, if any.
     let mut targets = vec![None; width];
+    // For each column not in a slot, the attribute it fills, if any.
+    let mut attribute_of = vec![None; width];
+    let mut attributes = TextAttributes::default();
+    let mut taken = std::collections::HashSet::new();
     let mut present = [false; 6];
     for (column, column_name) in names.iter().enumerate() {
-        let Some(slot) = SLOT_NAMES.iter().position(|n| n == column_name) else {
+        let lowercase = column_name.to_ascii_lowercase();
+        let Some(slot) = SLOT_NAMES.iter().position(|n| *n == lowercase) else {
+            if column_name == "_" && options.columns.is_some() {
+                continue;
+            }
+            // A name the writers can write back, and unique.
+            let name = usable_name(column_name, &format!("col{}", column + 1), &mut taken);
+            if let Some(target) = attribute_of.get_mut(column) {
+                *target = Some(attributes.add(name, column + 1));
+            }
             continue;
         };
         if let Some(flag) = present.get_mut(slot) {
             if *flag {
                 return Err(header_error(format!(
                     "duplicate column {}",
-                    quoted(column_name)
+                    quoted(&lowercase)
                 )));
             }
             *flag = true;
@@ -349,6 +453,9 @@ pub fn read_csv_with(
                 message: message.to_owned(),
             })?;
             let Some(&Some(slot)) = targets.get(column - 1) else {
+                if let Some(&Some(i)) = attribute_of.get(column - 1) {
+                    attributes.push(i, line, field.trim());
+                }
                 continue;
             };
             let value = parse_finite(field.trim()).map_err(|message| ReadError::Ascii {
@@ -374,10 +481,10 @@ pub fn read_csv_with(
         }
         cloud.push(values);
     }
-    Ok(ReadOutcome {
-        cloud: cloud.finish(),
-        notes: Vec::new(),
-    })
+    let mut notes = Vec::new();
+    let mut cloud = cloud.finish();
+    cloud.attributes = attributes.finish(name, |_| false, &mut notes);
+    Ok(ReadOutcome { cloud, notes })
 }
 
 /// The fields of one CSV line, unquoted. Yields an error message for a malformed quoted field

@@ -21,7 +21,7 @@ use mls_cli::pipeline::{self, Built, Scale, Timings};
 use mls_cli::{At, CurvatureOptions, Format, Method, NormalsMode, SurfaceOptions};
 use mls_core::normals::{DEFAULT_H_FACTOR, Orientation};
 use mls_core::{Cutoff, Parallelism, Point, PointStatus};
-use mls_io::{Column, ColumnNames, ReadError, ReadOptions, WriteError};
+use mls_io::{AttributeData, Column, ColumnNames, ReadError, ReadOptions, WriteError};
 use numpy::{PyArray1, PyArray2, PyArrayMethods, PyUntypedArrayMethods};
 use pyo3::exceptions::{
     PyAttributeError, PyFileNotFoundError, PyIsADirectoryError, PyKeyError, PyOSError,
@@ -929,13 +929,19 @@ fn python_words(message: &str) -> String {
 /// format : "ply", "xyz", "csv", "las" or "laz", optional
 /// columns : str or sequence of str, optional
 ///     Names of the columns of a text file, e.g. ``"x,y,z,nx,ny,nz,intensity"`` (the command's
-///     ``--columns``).
+///     ``--columns``; ``_`` skips a column).
+/// attributes : bool
+///     Also return the file's other per-point values, which the command carries to its output:
+///     PLY properties, text columns, LAS dimensions and extra bytes.
 ///
 /// Returns
 /// -------
-/// (points, normals)
-///     float64 arrays of shape (N, 3); ``normals`` is None when the file has none. The reader's
-///     notes (columns ignored or not taken as normals) are issued as ``UserWarning``.
+/// (points, normals) or (points, normals, attributes)
+///     float64 arrays of shape (N, 3); ``normals`` is None when the file has none.
+///     ``attributes`` (with ``attributes=True``) is a dict of one-dimensional arrays in the
+///     file's order, each in its stored type (``uint16`` for a LAS intensity, ``uint8`` for a
+///     PLY colour). The reader's notes (columns not taken as normals) are issued as
+///     ``UserWarning``.
 ///
 /// Raises
 /// ------
@@ -951,12 +957,13 @@ fn python_words(message: &str) -> String {
 /// >>> points.shape, normals is None                                    # doctest: +SKIP
 /// ((35947, 3), True)
 #[pyfunction]
-#[pyo3(signature = (path, *, format=None, columns=None))]
+#[pyo3(signature = (path, *, format=None, columns=None, attributes=false))]
 fn read<'py>(
     py: Python<'py>,
     path: PathBuf,
     format: Option<&str>,
     columns: Option<&Bound<'py, PyAny>>,
+    attributes: bool,
 ) -> PyResult<Bound<'py, PyTuple>> {
     let format = self::format(format)?;
     let columns = match columns {
@@ -992,7 +999,30 @@ fn read<'py>(
         Some(n) => vectors(py, n)?,
         None => py.None(),
     };
-    PyTuple::new(py, [points, normals])
+    if !attributes {
+        return PyTuple::new(py, [points, normals]);
+    }
+    let dict = PyDict::new(py);
+    for a in outcome.cloud.attributes {
+        dict.set_item(a.name, attribute_array(py, a.data))?;
+    }
+    PyTuple::new(py, [points, normals, dict.into_any().unbind()])
+}
+
+/// An attribute's values as a numpy array of its stored type.
+fn attribute_array(py: Python<'_>, data: AttributeData) -> Py<PyAny> {
+    match data {
+        AttributeData::I8(v) => scalars(py, v),
+        AttributeData::U8(v) => scalars(py, v),
+        AttributeData::I16(v) => scalars(py, v),
+        AttributeData::U16(v) => scalars(py, v),
+        AttributeData::I32(v) => scalars(py, v),
+        AttributeData::U32(v) => scalars(py, v),
+        AttributeData::I64(v) => scalars(py, v),
+        AttributeData::U64(v) => scalars(py, v),
+        AttributeData::F32(v) => scalars(py, v),
+        AttributeData::F64(v) => scalars(py, v),
+    }
 }
 
 /// A column to write, owned so that the writer can run without the GIL.
@@ -1179,7 +1209,7 @@ fn write(
     py.detach(|| {
         let output = pipeline::check_output(&[], &path, format, force, ascii, None)?;
         let columns: Vec<Column<'_>> = owned.iter().map(Owned::column).collect();
-        output.write(&columns, ascii)
+        output.write(&columns, ascii, None)
     })
     .map_err(file_error)
 }

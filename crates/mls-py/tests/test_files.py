@@ -77,6 +77,21 @@ def test_columns_argument_names_text_columns(tmp_path, cloud):
         mlscurv.read(path, columns="x,y")
 
 
+def test_attributes_in_their_stored_types(tmp_path, cloud):
+    points, _ = cloud
+    path = tmp_path / "cloud.csv"
+    label = np.arange(len(points)) % 7
+    weight = np.linspace(0.0, 1.0, len(points))
+    mlscurv.write(path, {"points": points, "label": label, "weight": weight})
+    p, n, attributes = mlscurv.read(path, attributes=True)
+    assert p.tobytes() == points.tobytes() and n is None
+    assert list(attributes) == ["label", "weight"]
+    assert attributes["label"].dtype.kind == "i" and attributes["label"].tolist() == label.tolist()
+    assert attributes["weight"].dtype == np.float64
+    assert attributes["weight"].tobytes() == weight.tobytes()
+    assert len(mlscurv.read(path)) == 2
+
+
 def test_missing_file_and_directory(tmp_path):
     with pytest.raises(FileNotFoundError, match="nothing.ply"):
         mlscurv.read(tmp_path / "nothing.ply")

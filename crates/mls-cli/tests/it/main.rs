@@ -3,6 +3,7 @@
 
 mod adaptive;
 mod atomic;
+mod attributes;
 mod bad_input;
 mod chunks;
 mod columns;

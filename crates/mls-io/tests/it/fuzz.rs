@@ -7,6 +7,7 @@ fn sample() -> PointCloud {
     PointCloud {
         points: vec![[0.0, 1.0, 2.0], [-3.5, 4.25, 1e10], [7.0, 8.0, 9.0]],
         normals: Some(vec![[0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]),
+        ..PointCloud::default()
     }
 }
 

@@ -1,6 +1,7 @@
 //! The one integration-test binary of mls-io (one binary keeps link time down).
 
 mod atomic;
+mod attributes;
 mod fuzz;
 mod las;
 mod malformed;

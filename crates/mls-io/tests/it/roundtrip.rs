@@ -62,6 +62,7 @@ impl Table {
         let cloud = PointCloud {
             points: vectors(),
             normals: Some(vectors()),
+            ..PointCloud::default()
         };
         let mut extra: Vec<Vec<f64>> = EXTRA
             .iter()
@@ -305,6 +306,7 @@ fn points_without_normals_round_trip() {
     let cloud = PointCloud {
         points: vec![[1.0, 2.0, 3.0]],
         normals: None,
+        ..PointCloud::default()
     };
     let mut bytes = Vec::new();
     write_ply_to(

@@ -1,9 +1,9 @@
 //! XYZ/TXT/PTS and CSV files with known contents.
 
 use mls_io::{
-    ColumnNames, FileFormat, PointCloud, ReadError, ReadOptions, ReadOutcome, read_csv,
-    read_csv_with, read_point_cloud_as_with, read_point_cloud_from_with, read_point_cloud_with,
-    read_xyz, read_xyz_with,
+    Attribute, AttributeData, ColumnNames, FileFormat, ReadError, ReadOptions, ReadOutcome,
+    read_csv, read_csv_with, read_point_cloud_as_with, read_point_cloud_from_with,
+    read_point_cloud_with, read_xyz, read_xyz_with,
 };
 
 #[test]
@@ -146,13 +146,30 @@ fn unit_columns_are_normals_within_the_tolerance() {
 
 #[test]
 fn four_and_seven_columns() {
-    // x y z intensity: the fourth column is skipped unparsed, with a note.
-    let read = read_with("1 2 3 17\n4 5 6 roof\n", None).unwrap();
+    // x y z intensity: the fourth column is an attribute, unless it is not numbers.
+    let read = read_with("1 2 3 17\n4 5 6 18\n", None).unwrap();
     assert_eq!(read.cloud.points, [[1.0, 2.0, 3.0], [4.0, 5.0, 6.0]]);
     assert_eq!(read.cloud.normals, None);
     assert_eq!(
+        read.cloud.attributes,
+        [Attribute {
+            name: "col4".to_owned(),
+            data: AttributeData::I32(vec![17, 18]),
+        }]
+    );
+    assert_eq!(
         read.notes,
-        ["scan.txt: 4 columns; column 4 is ignored (name the columns with --columns to choose)"]
+        [
+            "scan.txt: 4 columns; column 4 is carried as attribute col4 (name the columns with \
+          --columns)"
+        ]
+    );
+    let read = read_with("1 2 3 17\n4 5 6 roof\n", None).unwrap();
+    assert!(read.cloud.attributes.is_empty());
+    assert_eq!(
+        read.notes[1],
+        "scan.txt: column 4 (col4) is not carried to the output: line 2 holds \"roof\", not a \
+         number"
     );
     // x y z nx ny nz intensity.
     let read = read_with("1 2 3 0 0 1 0.25\n4 5 6 1 0 0 0.5\n", None).unwrap();
@@ -161,27 +178,38 @@ fn four_and_seven_columns() {
         Some(vec![[0.0, 0.0, 1.0], [1.0, 0.0, 0.0]])
     );
     assert_eq!(read.notes.len(), 1);
-    assert!(read.notes[0].contains("7 columns; column 7 is ignored"));
-    // x y z r g b intensity: neither colour nor intensity is read.
+    assert!(read.notes[0].contains("7 columns; column 7 is carried as attribute col7"));
+    assert_eq!(
+        read.cloud.attributes,
+        [Attribute {
+            name: "col7".to_owned(),
+            data: AttributeData::F64(vec![0.25, 0.5]),
+        }]
+    );
+    // x y z r g b intensity: colour and intensity are attributes, not normals.
     let read = read_with("1 2 3 10 20 30 0.25\n", None).unwrap();
     assert_eq!(read.cloud.normals, None);
     assert_eq!(read.notes.len(), 2, "{:?}", read.notes);
+    let names: Vec<&str> = read
+        .cloud
+        .attributes
+        .iter()
+        .map(|a| a.name.as_str())
+        .collect();
+    assert_eq!(names, ["col4", "col5", "col6", "col7"]);
+    assert_eq!(read.cloud.attributes[1].data, AttributeData::I32(vec![20]));
     // Nine columns, colour then normals: 7-9 are not guessed at.
     let read = read_with("1 2 3 10 20 30 0 0 1\n", None).unwrap();
     assert_eq!(read.cloud.normals, None);
     assert!(
-        read.notes[1].contains("columns 7-9 are ignored"),
+        read.notes[1].contains("columns 7-9 are carried as attributes col7-col9"),
         "{:?}",
         read.notes
     );
     // The old reader's entry point reads the same, without the notes.
-    assert_eq!(
-        read_xyz("1 2 3 10 20 30 0.25\n".as_bytes(), "a.xyz").unwrap(),
-        PointCloud {
-            points: vec![[1.0, 2.0, 3.0]],
-            normals: None
-        }
-    );
+    let cloud = read_xyz("1 2 3 10 20 30 0.25\n".as_bytes(), "a.xyz").unwrap();
+    assert_eq!(cloud.points, [[1.0, 2.0, 3.0]]);
+    assert_eq!(cloud.attributes.len(), 4);
 }
 
 #[test]

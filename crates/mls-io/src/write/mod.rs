@@ -1,17 +1,21 @@
 //! Writers: a table of named columns to PLY (binary little-endian or ASCII), CSV, XYZ, or
-//! LAS/LAZ (in `las.rs`).
+//! LAS/LAZ (in `las/`); the PLY and text rows are encoded in `rows.rs`.
 //!
 //! Files are written atomically: into a temporary file in the destination's directory, which
 //! is flushed, synced and then renamed over the destination. On any error the temporary file
 //! is removed and the destination is untouched.
 
-use std::fmt::Write as _;
+mod rows;
+
 use std::fs::File;
 use std::io::{self, BufWriter, Write};
 use std::path::{Path, PathBuf};
-use std::slice;
 
+use rows::{Cursor, TextHeader, write_ply_rows, write_text_rows};
+
+use crate::attributes::{Attribute, AttributeData};
 use crate::error::WriteError;
+use crate::las::LasTemplate;
 use crate::{FileFormat, detect_format};
 
 /// Size of the output buffer: large enough that a million rows take few system calls.
@@ -55,6 +59,10 @@ pub enum ColumnData<'a> {
         /// The component to write.
         axis: Axis,
     },
+    /// An attribute carried from the input, written in its own type: in PLY as a property of
+    /// that type (64-bit integers as `double`), in LAS as extra bytes of that type or as the
+    /// standard field it came from ([`WriteOptions::las`]).
+    Attribute(&'a AttributeData),
 }
 
 impl ColumnData<'_> {
@@ -64,6 +72,7 @@ impl ColumnData<'_> {
             Self::F64(data) => data.len(),
             Self::I32(data) => data.len(),
             Self::Component { vectors, .. } => vectors.len(),
+            Self::Attribute(data) => data.len(),
         }
     }
 
@@ -72,11 +81,21 @@ impl ColumnData<'_> {
         self.len() == 0
     }
 
-    fn cursor(&self) -> Cursor<'_> {
+    pub(crate) fn cursor(&self) -> Cursor<'_> {
         match *self {
             Self::F64(data) => Cursor::F64(data.iter()),
             Self::I32(data) => Cursor::I32(data.iter()),
             Self::Component { vectors, axis } => Cursor::Component(vectors.iter(), axis),
+            Self::Attribute(data) => Cursor::Attribute(data, 0),
+        }
+    }
+
+    /// The PLY property type written for the column.
+    pub(crate) fn ply_type(&self) -> &'static str {
+        match self {
+            Self::I32(_) => "int",
+            Self::F64(_) | Self::Component { .. } => "double",
+            Self::Attribute(data) => data.ty().ply_name(),
         }
     }
 }
@@ -107,6 +126,14 @@ impl<'a> Column<'a> {
         }
     }
 
+    /// A column of an attribute's values, under its name.
+    pub fn attribute(attribute: &'a Attribute) -> Self {
+        Self {
+            name: &attribute.name,
+            data: ColumnData::Attribute(&attribute.data),
+        }
+    }
+
     /// A floating-point column holding one component of `vectors`.
     pub fn component(name: &'a str, vectors: &'a [[f64; 3]], axis: Axis) -> Self {
         Self {
@@ -124,6 +151,19 @@ pub enum PlyFormat {
     BinaryLittleEndian,
     /// `ascii`: readable, still exact (shortest round-trip decimal form).
     Ascii,
+}
+
+/// How to write a table, beyond its format.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct WriteOptions<'a> {
+    /// The encoding of PLY output.
+    pub ply_format: PlyFormat,
+    /// For LAS/LAZ output, the layout of the LAS input the table came from
+    /// ([`PointCloud::las`](crate::PointCloud::las)): its point format (without waveform
+    /// data), scale and offset, GPS time type, coordinate-system records, and the standard
+    /// fields and extra-bytes descriptors of its dimensions, so that columns named as its
+    /// dimensions go back where they came from. Ignored for other formats.
+    pub las: Option<&'a LasTemplate>,
 }
 
 /// Writes `columns` to `path` in the format its extension names (case-insensitive): `.ply`
@@ -158,12 +198,36 @@ pub fn write_point_cloud_as(
     columns: &[Column<'_>],
     ply_format: PlyFormat,
 ) -> Result<(), WriteError> {
+    let options = WriteOptions {
+        ply_format,
+        las: None,
+    };
+    write_point_cloud_as_with(path, format, columns, &options)
+}
+
+/// Writes `columns` to `path` in the given format, atomically, as [`write_point_cloud_as`]
+/// does, with options.
+///
+/// # Errors
+/// Those of [`write_point_cloud_as`].
+pub fn write_point_cloud_as_with(
+    path: &Path,
+    format: FileFormat,
+    columns: &[Column<'_>],
+    options: &WriteOptions<'_>,
+) -> Result<(), WriteError> {
     match format {
-        FileFormat::Ply => write_ply(path, columns, ply_format),
+        FileFormat::Ply => write_ply(path, columns, options.ply_format),
         FileFormat::Csv => write_csv(path, columns),
         FileFormat::Xyz => write_xyz(path, columns),
-        FileFormat::Las => write_las(path, columns, false),
-        FileFormat::Laz => write_las(path, columns, true),
+        FileFormat::Las | FileFormat::Laz => {
+            let file = path.display().to_string();
+            validate(&file, columns)?;
+            let compressed = format == FileFormat::Laz;
+            write_atomically(path, |out| {
+                crate::las::write_file(out, &file, columns, compressed, options.las)
+            })
+        }
     }
 }
 
@@ -179,12 +243,31 @@ pub fn write_point_cloud_to(
     columns: &[Column<'_>],
     ply_format: PlyFormat,
 ) -> Result<(), WriteError> {
+    let options = WriteOptions {
+        ply_format,
+        las: None,
+    };
+    write_point_cloud_to_with(writer, name, format, columns, &options)
+}
+
+/// Writes `columns` in the given format to a stream, as [`write_point_cloud_to`] does, with
+/// options.
+///
+/// # Errors
+/// Those of [`write_point_cloud_to`].
+pub fn write_point_cloud_to_with(
+    writer: impl Write,
+    name: &str,
+    format: FileFormat,
+    columns: &[Column<'_>],
+    options: &WriteOptions<'_>,
+) -> Result<(), WriteError> {
     match format {
-        FileFormat::Ply => write_ply_to(writer, name, columns, ply_format),
+        FileFormat::Ply => write_ply_to(writer, name, columns, options.ply_format),
         FileFormat::Csv => write_csv_to(writer, name, columns),
         FileFormat::Xyz => write_xyz_to(writer, name, columns),
-        FileFormat::Las => crate::las::write_stream(writer, name, columns, false),
-        FileFormat::Laz => crate::las::write_stream(writer, name, columns, true),
+        FileFormat::Las => crate::las::write_stream(writer, name, columns, false, options.las),
+        FileFormat::Laz => crate::las::write_stream(writer, name, columns, true, options.las),
     }
 }
 
@@ -234,9 +317,13 @@ pub fn write_xyz(path: &Path, columns: &[Column<'_>]) -> Result<(), WriteError> 
 
 /// Writes `columns` as LAS 1.4 (point format 6), or LAZ if `compressed`, atomically: the
 /// columns `x`, `y`, `z` as the point coordinates, on a decimal grid of 1e-8 to 1e-7 of the
-/// bounding box's largest extent with the offset at its minimum; every other column, in order,
-/// as a named LAS extra-bytes attribute (`double` for float columns, `long` (i32) for integer
-/// ones), which PDAL, laspy and CloudCompare show as dimensions.
+/// bounding box's largest extent with the offset at its minimum; an attribute column with the
+/// name and type of a point format 6 dimension (`intensity` `uint16` …; a flag only if every
+/// value fits its bits) in that field; every other column, in order, as a named LAS
+/// extra-bytes attribute (`double` for float columns, `long` (i32) for integer ones, an
+/// attribute's own type for attribute columns), which PDAL, laspy and CloudCompare show as
+/// dimensions. To keep a LAS input's layout, use [`write_point_cloud_as_with`] with its
+/// [`LasTemplate`].
 ///
 /// # Errors
 /// Those of [`write_ply`], [`WriteError::MissingCoordinate`] without an `x`, `y` or `z` column,
@@ -246,7 +333,7 @@ pub fn write_las(path: &Path, columns: &[Column<'_>], compressed: bool) -> Resul
     let file = path.display().to_string();
     validate(&file, columns)?;
     write_atomically(path, |out| {
-        crate::las::write_file(out, &file, columns, compressed)
+        crate::las::write_file(out, &file, columns, compressed, None)
     })
 }
 
@@ -297,7 +384,7 @@ pub fn write_xyz_to(
     out.flush().map_err(io_error(name))
 }
 
-fn io_error(file: &str) -> impl FnOnce(std::io::Error) -> WriteError + '_ {
+pub(crate) fn io_error(file: &str) -> impl FnOnce(std::io::Error) -> WriteError + '_ {
     move |error| WriteError::Io {
         file: file.to_owned(),
         error,
@@ -426,133 +513,4 @@ fn resolve_links(path: &Path) -> io::Result<PathBuf> {
         }
     }
     Ok(path)
-}
-
-/// One value from a column.
-#[derive(Clone, Copy, Debug)]
-enum Value {
-    F64(f64),
-    I32(i32),
-}
-
-/// Walks one column row by row, so rows can be written without indexing.
-#[derive(Debug)]
-enum Cursor<'a> {
-    F64(slice::Iter<'a, f64>),
-    I32(slice::Iter<'a, i32>),
-    Component(slice::Iter<'a, [f64; 3]>, Axis),
-}
-
-impl Iterator for Cursor<'_> {
-    type Item = Value;
-
-    fn next(&mut self) -> Option<Value> {
-        match self {
-            Self::F64(iter) => iter.next().map(|&v| Value::F64(v)),
-            Self::I32(iter) => iter.next().map(|&v| Value::I32(v)),
-            Self::Component(iter, axis) => iter.next().map(|v| Value::F64(axis.of(v))),
-        }
-    }
-}
-
-fn write_ply_rows(
-    out: &mut impl Write,
-    file: &str,
-    columns: &[Column<'_>],
-    rows: usize,
-    format: PlyFormat,
-) -> Result<(), WriteError> {
-    let mut header = String::from("ply\n");
-    header.push_str(match format {
-        PlyFormat::BinaryLittleEndian => "format binary_little_endian 1.0\n",
-        PlyFormat::Ascii => "format ascii 1.0\n",
-    });
-    header.push_str("comment written by mls-io\n");
-    // Writing to a String cannot fail.
-    let _ = writeln!(header, "element vertex {rows}");
-    for column in columns {
-        let ty = match column.data {
-            ColumnData::I32(_) => "int",
-            ColumnData::F64(_) | ColumnData::Component { .. } => "double",
-        };
-        let _ = writeln!(header, "property {ty} {}", column.name);
-    }
-    header.push_str("end_header\n");
-    out.write_all(header.as_bytes()).map_err(io_error(file))?;
-    match format {
-        PlyFormat::BinaryLittleEndian => write_binary_rows(out, file, columns, rows),
-        PlyFormat::Ascii => write_text_rows(out, file, columns, rows, ' ', TextHeader::None),
-    }
-}
-
-fn write_binary_rows(
-    out: &mut impl Write,
-    file: &str,
-    columns: &[Column<'_>],
-    rows: usize,
-) -> Result<(), WriteError> {
-    let mut cursors: Vec<Cursor<'_>> = columns.iter().map(|c| c.data.cursor()).collect();
-    let mut row = Vec::with_capacity(8 * columns.len());
-    for _ in 0..rows {
-        row.clear();
-        for value in cursors.iter_mut().filter_map(Iterator::next) {
-            match value {
-                Value::F64(v) => row.extend_from_slice(&v.to_le_bytes()),
-                Value::I32(v) => row.extend_from_slice(&v.to_le_bytes()),
-            }
-        }
-        out.write_all(&row).map_err(io_error(file))?;
-    }
-    Ok(())
-}
-
-/// What comes before the rows of a text table.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum TextHeader {
-    /// Nothing (the body of an ASCII PLY, whose header names the properties).
-    None,
-    /// A row of the names (CSV).
-    Names,
-    /// A `#` comment line of the names (XYZ), which readers of such files skip.
-    Comment,
-}
-
-/// Writes the rows as text, after the names as `header` says.
-fn write_text_rows(
-    out: &mut impl Write,
-    file: &str,
-    columns: &[Column<'_>],
-    rows: usize,
-    separator: char,
-    header: TextHeader,
-) -> Result<(), WriteError> {
-    let names: Vec<&str> = columns.iter().map(|c| c.name).collect();
-    let line = match header {
-        TextHeader::None => None,
-        TextHeader::Names => Some(names.join(&separator.to_string()) + "\n"),
-        TextHeader::Comment => Some(format!("# {}\n", names.join(&separator.to_string()))),
-    };
-    if let Some(line) = line {
-        out.write_all(line.as_bytes()).map_err(io_error(file))?;
-    }
-    let mut cursors: Vec<Cursor<'_>> = columns.iter().map(|c| c.data.cursor()).collect();
-    let mut row = String::with_capacity(24 * columns.len());
-    for _ in 0..rows {
-        row.clear();
-        for (index, value) in cursors.iter_mut().filter_map(Iterator::next).enumerate() {
-            if index > 0 {
-                row.push(separator);
-            }
-            // `{:?}` gives the shortest decimal that parses back to the same f64, switching
-            // to exponent form for very large or small magnitudes. Writing to a String cannot
-            // fail.
-            let _ = match value {
-                Value::F64(v) => write!(row, "{v:?}"),
-                Value::I32(v) => write!(row, "{v}"),
-            };
-        }
-        row.push('\n');
-        out.write_all(row.as_bytes()).map_err(io_error(file))?;
-    }
-    Ok(())
 }

@@ -1,0 +1,106 @@
+//! `mlscurv info`: what a cloud holds and how the other commands would read it.
+
+use std::fmt::Write as _;
+
+use anyhow::Result;
+use mls_core::normals::{DEFAULT_NEIGHBOURS, NeighbourGraph, orientation_consistency};
+use mls_core::{Parallelism, Vector};
+
+use mls_cli::pipeline;
+
+use crate::InfoArgs;
+
+pub fn info(a: InfoArgs) -> Result<()> {
+    // The report is collected and written at once: `println!` panics when the reader of a pipe
+    // (`mlscurv info x.ply | head -3`) has gone.
+    let mut out = String::new();
+    let result = info_report(&a, &mut out);
+    pipeline::write_stdout(out.as_bytes())?;
+    result
+}
+
+fn info_report(a: &InfoArgs, out: &mut String) -> Result<()> {
+    // Writing to a String cannot fail.
+    macro_rules! println {
+        ($($arg:tt)*) => {{
+            let _ = writeln!(out, $($arg)*);
+        }};
+    }
+    let cloud = pipeline::read_any(&a.input, a.input_format, a.columns.as_ref())?;
+    let points = pipeline::to_points(&cloud);
+    println!("file            {}", pipeline::input_name(&a.input));
+    println!("points          {}", points.len());
+    if points.is_empty() {
+        return Ok(());
+    }
+    let (lo, hi) = points
+        .iter()
+        .fold((points[0].coords, points[0].coords), |(lo, hi), p| {
+            (lo.inf(&p.coords), hi.sup(&p.coords))
+        });
+    println!(
+        "bounding box    [{:.6}, {:.6}, {:.6}] .. [{:.6}, {:.6}, {:.6}]",
+        lo.x, lo.y, lo.z, hi.x, hi.y, hi.z
+    );
+    let size = hi - lo;
+    println!(
+        "size            {:.6} × {:.6} × {:.6}",
+        size.x, size.y, size.z
+    );
+    match pipeline::choose_h(
+        &points,
+        None,
+        mls_core::normals::DEFAULT_H_FACTOR,
+        Parallelism::Rayon,
+        &pipeline::input_name(&a.input),
+    ) {
+        Ok(scale) => {
+            if let Some(s) = scale.spacing {
+                println!(
+                    "spacing         {:.6} (median local); nearest neighbour min {:.6}, median {:.6}, p90 {:.6}, max {:.6}",
+                    s.spacing, s.nearest.min, s.nearest.median, s.nearest.p90, s.nearest.max
+                );
+                println!("duplicates      {}", s.duplicates);
+            }
+            println!("suggested h     {:.6} = {}", scale.h, scale.why);
+        }
+        Err(e) => println!("spacing         unavailable: {e:#}"),
+    }
+    match &cloud.normals {
+        None => println!("normals         absent (curvature will estimate and orient them)"),
+        Some(n) => {
+            let normals: Vec<Vector> = n.iter().map(|n| Vector::from(*n)).collect();
+            let zero = normals
+                .iter()
+                .filter(|n| mls_core::UnitNormal::new(**n).is_err())
+                .count();
+            let graph = NeighbourGraph::build(&points, DEFAULT_NEIGHBOURS, Parallelism::Rayon)?;
+            let consistency = orientation_consistency(&graph, &normals, Parallelism::Rayon)?;
+            let verdict = match consistency {
+                Some(c) if c >= 0.99 => format!(
+                    "consistently oriented ({:.2}% of neighbour pairs agree)",
+                    100.0 * c
+                ),
+                Some(c) => format!(
+                    "NOT consistently oriented: {:.2}% of neighbour pairs agree (use --normals estimate)",
+                    100.0 * c
+                ),
+                None => "orientation unknown (no neighbour pairs with normals)".into(),
+            };
+            println!("normals         present, {zero} zero or invalid; {verdict}");
+        }
+    }
+    if !cloud.attributes.is_empty() {
+        let list: Vec<String> = cloud
+            .attributes
+            .iter()
+            .map(|a| format!("{} ({})", a.name, a.data.ty().name()))
+            .collect();
+        println!(
+            "attributes      {} (carried to the output): {}",
+            list.len(),
+            list.join(", ")
+        );
+    }
+    Ok(())
+}

@@ -1,0 +1,84 @@
+//! LAS and LAZ (ASPRS LAS 1.0–1.4, LASzip-compressed or not) through the `las` crate.
+//!
+//! Reading gives the points as `f64` world coordinates (the crate applies the header's scale
+//! and offset), every standard dimension of the point format and every extra-bytes attribute
+//! as [`Attribute`](crate::Attribute)s in their stored types (`dims.rs` names them), normals
+//! from `f64` extra bytes `nx`, `ny`, `nz` (as `mlscurv` writes them), and the header's layout
+//! as a [`LasTemplate`].
+//!
+//! Writing is LAS 1.4: point format 6 without a template, `x y z` in the records, columns
+//! named as a standard dimension of the format and of its type (a flag only if every value
+//! fits its bits) in that field, and every other column as a named extra-bytes attribute of
+//! its type (`f64` for float columns, `i32` for integer ones), described by an Extra Bytes
+//! VLR so that PDAL, laspy and CloudCompare show them as dimensions. With the template of a
+//! LAS input: its point format (without waveform packets), scale, offset, GPS time type, file
+//! source id and coordinate-system records, so its dimensions go back into their fields, and
+//! its extra-bytes attributes keep their descriptors (options, scale, no-data value,
+//! description).
+//!
+//! Without a template the coordinate scale is the power of ten `10^(floor(log10 E) - 7)`,
+//! where `E` is the largest extent of the bounding box, and the offset is the box's minimum:
+//! every coordinate is then stored within half a scale step, between 5e-9 and 5e-8 of `E`,
+//! far below the 1e-6 relative resolution the curvature needs, and the stored integers stay
+//! below 10^8, well inside the `i32` range. A decimal scale is what LiDAR tools expect to
+//! display.
+
+mod dims;
+mod extra;
+mod read;
+mod write;
+
+use las::{GpsTimeType, Vlr};
+
+pub(crate) use read::{read, read_stream};
+pub(crate) use write::{write_file, write_stream};
+
+/// The layout of a LAS input, kept so that LAS output from it looks like it: see
+/// [`WriteOptions::las`](crate::WriteOptions::las).
+#[derive(Clone, Debug, PartialEq)]
+pub struct LasTemplate {
+    /// The point format written: the input's, without waveform packets (4 → 1, 5 → 3,
+    /// 9 → 6, 10 → 8).
+    pub point_format: u8,
+    /// The input's coordinate scale, x y z.
+    pub scale: [f64; 3],
+    /// The input's coordinate offset, x y z.
+    pub offset: [f64; 3],
+    gps_time_type: GpsTimeType,
+    file_source_id: u16,
+    has_wkt_crs: bool,
+    /// The extra-bytes descriptors of the carried extra-bytes attributes, by name.
+    descriptors: Vec<(String, extra::Descriptor)>,
+    /// Records carried as they are (coordinate system and the like), not those that describe
+    /// the input's own layout (extra bytes, LASzip, waveform packets, COPC).
+    vlrs: Vec<Vlr>,
+    evlrs: Vec<Vlr>,
+}
+
+impl LasTemplate {
+    fn from_header(
+        header: &las::Header,
+        point_format: u8,
+        descriptors: Vec<(String, extra::Descriptor)>,
+    ) -> Self {
+        let t = header.transforms();
+        let carried = |v: &&Vlr| {
+            let layout = (v.user_id == extra::USER_ID
+                && (v.record_id == extra::RECORD_ID || (100..=354).contains(&v.record_id)))
+                || v.user_id == "laszip encoded"
+                || v.user_id == "copc";
+            !layout
+        };
+        Self {
+            point_format: dims::without_waveform(point_format),
+            scale: [t.x.scale, t.y.scale, t.z.scale],
+            offset: [t.x.offset, t.y.offset, t.z.offset],
+            gps_time_type: header.gps_time_type(),
+            file_source_id: header.file_source_id(),
+            has_wkt_crs: header.has_wkt_crs(),
+            descriptors,
+            vlrs: header.vlrs().iter().filter(carried).cloned().collect(),
+            evlrs: header.evlrs().iter().filter(carried).cloned().collect(),
+        }
+    }
+}

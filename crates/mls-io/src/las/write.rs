@@ -1,0 +1,353 @@
+//! Writing a table as LAS 1.4 or LAZ: raw point records encoded here and handed to the `las`
+//! writer in chunks.
+
+use std::fs::File;
+use std::io::{self, BufWriter, Cursor, Seek, Write};
+
+use las::point::Format;
+use las::{Builder, PointDataBuilder, Transform, Vector, Version, Vlr, Writer};
+
+use super::LasTemplate;
+use super::dims::{self, Field};
+use super::extra::{self, Descriptor, MAX_NAME_BYTES};
+use crate::attributes::{AttributeData, Scalar};
+use crate::error::WriteError;
+use crate::write::{Column, ColumnData, validate};
+
+/// Points encoded per call to the `las` writer.
+const CHUNK_POINTS: usize = 1 << 16;
+
+/// The plan of a LAS file for a table: the coordinate columns, the columns that go into
+/// standard fields, the extra-bytes columns and the header.
+#[derive(Debug)]
+struct Plan<'c, 'a> {
+    xyz: [&'c Column<'a>; 3],
+    standard: Vec<(Field, &'c Column<'a>)>,
+    /// The fields without a column, written with their defaults.
+    defaults: Vec<Field>,
+    extra: Vec<&'c Column<'a>>,
+    transforms: Vector<Transform>,
+    format: Format,
+}
+
+/// Checks the table and chooses the header for it.
+fn plan<'c, 'a>(
+    file: &str,
+    columns: &'c [Column<'a>],
+    compressed: bool,
+    template: Option<&LasTemplate>,
+) -> Result<(Plan<'c, 'a>, Builder, usize), WriteError> {
+    let rows = validate(file, columns)?;
+    let find = |name: &'static str| {
+        columns
+            .iter()
+            .find(|c| c.name == name)
+            .ok_or_else(|| WriteError::MissingCoordinate {
+                file: file.to_owned(),
+                field: name,
+            })
+    };
+    let xyz = [find("x")?, find("y")?, find("z")?];
+    let number = template.map_or(6, |t| t.point_format);
+    // A column named as a standard field of the format, of the field's type (and, for a bit
+    // field, with every value within its bits), goes into that field: a LAS input's dimensions
+    // go back where they came from. Anything else is extra bytes.
+    let mut standard = Vec::new();
+    let mut defaults = Vec::new();
+    for f in dims::fields(number) {
+        let column = columns.iter().find(|c| {
+            c.name == f.name && matches!(c.data, ColumnData::Attribute(d) if fits(d, &f))
+        });
+        match column {
+            Some(c) => standard.push((f, c)),
+            None => defaults.push(f),
+        }
+    }
+    let extra: Vec<&Column<'_>> = columns
+        .iter()
+        .filter(|c| !matches!(c.name, "x" | "y" | "z"))
+        .filter(|c| !standard.iter().any(|(_, s)| s.name == c.name))
+        .collect();
+    for column in &extra {
+        if column.name.len() > MAX_NAME_BYTES {
+            return Err(WriteError::InvalidColumnName {
+                file: file.to_owned(),
+                name: column.name.to_owned(),
+                reason: "longer than 32 characters, the limit of a LAS extra-bytes name",
+            });
+        }
+    }
+    let transforms = match template {
+        Some(t) => {
+            let transform = |i: usize| Transform {
+                scale: t.scale[i],
+                offset: t.offset[i],
+            };
+            Vector {
+                x: transform(0),
+                y: transform(1),
+                z: transform(2),
+            }
+        }
+        None => fitted_transforms(file, &xyz, rows)?,
+    };
+    let mut builder = Builder::from(Version::new(1, 4));
+    let mut format = Format::new(number).map_err(|e| las_error(file, &e))?;
+    let extra_len: usize = extra
+        .iter()
+        .map(|c| extra::column_type(&c.data).size())
+        .sum();
+    format.extra_bytes = u16::try_from(extra_len)
+        .ok()
+        .filter(|&n| usize::from(n) + usize::from(format.len()) <= usize::from(u16::MAX))
+        .ok_or_else(|| WriteError::Las {
+            file: file.to_owned(),
+            message: format!("{} columns do not fit in a LAS point record", columns.len()),
+        })?;
+    format.is_compressed = compressed;
+    builder.point_format = format;
+    builder.transforms = transforms;
+    "mls-curvature".clone_into(&mut builder.generating_software);
+    if let Some(t) = template {
+        builder.gps_time_type = t.gps_time_type;
+        builder.file_source_id = t.file_source_id;
+        builder.has_wkt_crs = t.has_wkt_crs;
+        builder.vlrs.extend(t.vlrs.iter().cloned());
+        builder.evlrs.extend(t.evlrs.iter().cloned());
+    }
+    if !extra.is_empty() {
+        builder.vlrs.push(Vlr {
+            user_id: extra::USER_ID.to_owned(),
+            record_id: extra::RECORD_ID,
+            description: "Extra Bytes".to_owned(),
+            data: extra.iter().flat_map(|c| descriptor(c, template)).collect(),
+        });
+    }
+    Ok((
+        Plan {
+            xyz,
+            standard,
+            defaults,
+            extra,
+            transforms,
+            format,
+        },
+        builder,
+        rows,
+    ))
+}
+
+/// Whether every value of `data` can be stored in field `f` as it is.
+fn fits(data: &AttributeData, f: &Field) -> bool {
+    match (f.bits, data) {
+        (None, data) => data.ty() == f.ty,
+        (Some((_, mask)), AttributeData::U8(values)) => values.iter().all(|&v| v <= mask),
+        (Some(_), _) => false,
+    }
+}
+
+/// The input's descriptor for a column it carried, if the name and type still agree, else a
+/// new one.
+fn descriptor(column: &Column<'_>, template: Option<&LasTemplate>) -> Descriptor {
+    let ty = extra::column_type(&column.data);
+    template
+        .and_then(|t| t.descriptors.iter().find(|(name, _)| name == column.name))
+        .filter(|(_, d)| d[2] == ty.las_code())
+        .map_or_else(|| extra::descriptor(column), |(_, d)| *d)
+}
+
+/// The transforms for a table without a template: the bounding box's minimum as offset, and
+/// the scale of [`coordinate_scale`].
+fn fitted_transforms(
+    file: &str,
+    xyz: &[&Column<'_>; 3],
+    rows: usize,
+) -> Result<Vector<Transform>, WriteError> {
+    // The bounding box, which must be finite: a LAS coordinate is an integer step.
+    let mut min = [f64::INFINITY; 3];
+    let mut max = [f64::NEG_INFINITY; 3];
+    for (axis, column) in xyz.iter().enumerate() {
+        for row in 0..rows {
+            let value = f64_at(&column.data, row);
+            if !value.is_finite() {
+                return Err(WriteError::NonFiniteCoordinate {
+                    file: file.to_owned(),
+                    column: column.name.to_owned(),
+                    row,
+                });
+            }
+            min[axis] = min[axis].min(value);
+            max[axis] = max[axis].max(value);
+        }
+    }
+    if rows == 0 {
+        min = [0.0; 3];
+        max = [0.0; 3];
+    }
+    let extent = (0..3).map(|i| max[i] - min[i]).fold(0.0, f64::max);
+    let scale = coordinate_scale(extent);
+    let transform = |axis: usize| Transform {
+        scale,
+        offset: min[axis],
+    };
+    Ok(Vector {
+        x: transform(0),
+        y: transform(1),
+        z: transform(2),
+    })
+}
+
+/// The power of ten between 1e-8 and 1e-7 of `extent` (see the module documentation).
+fn coordinate_scale(extent: f64) -> f64 {
+    if extent > 0.0 && extent.is_finite() {
+        10f64.powi(extent.log10().floor() as i32 - 7)
+    } else {
+        // One point, or all at the same place: every stored integer is 0 whatever the scale.
+        1e-7
+    }
+}
+
+/// Value `row` of a column, as a float (NaN past the end, which `validate` rules out).
+fn f64_at(data: &ColumnData<'_>, row: usize) -> f64 {
+    column_value(data, row).map_or(f64::NAN, Scalar::to_f64)
+}
+
+/// Value `row` of a column.
+fn column_value(data: &ColumnData<'_>, row: usize) -> Option<Scalar> {
+    Some(match *data {
+        ColumnData::F64(values) => Scalar::F64(*values.get(row)?),
+        ColumnData::I32(values) => Scalar::I32(*values.get(row)?),
+        ColumnData::Component { vectors, axis } => Scalar::F64(axis.of(vectors.get(row)?)),
+        ColumnData::Attribute(values) => values.get(row)?,
+    })
+}
+
+fn las_error(file: &str, error: &las::Error) -> WriteError {
+    match error {
+        las::Error::Io(io) => WriteError::Io {
+            file: file.to_owned(),
+            error: io::Error::new(io.kind(), io.to_string()),
+        },
+        other => WriteError::Las {
+            file: file.to_owned(),
+            message: other.to_string(),
+        },
+    }
+}
+
+/// Writes the table as LAS or LAZ to `write`, which must be positioned where the file
+/// starts.
+fn write_to<W>(
+    write: W,
+    file: &str,
+    columns: &[Column<'_>],
+    compressed: bool,
+    template: Option<&LasTemplate>,
+) -> Result<W, WriteError>
+where
+    W: Write + Seek + Send + Sync + 'static,
+{
+    let (plan, builder, rows) = plan(file, columns, compressed, template)?;
+    let header = builder.into_header().map_err(|e| las_error(file, &e))?;
+    let mut writer = Writer::new(write, header).map_err(|e| las_error(file, &e))?;
+    let written = write_points(&mut writer, &plan, rows).and_then(|()| writer.close());
+    match written {
+        Ok(()) => writer.into_inner().map_err(|e| las_error(file, &e)),
+        Err(e) => {
+            // The `las` writer closes itself when dropped and panics if that fails, which it
+            // may after a failed write: leak it instead, on this error path only.
+            std::mem::forget(writer);
+            Err(las_error(file, &e))
+        }
+    }
+}
+
+/// Encodes the rows as raw point records, chunk by chunk.
+fn write_points<W>(writer: &mut Writer<W>, plan: &Plan<'_, '_>, rows: usize) -> las::Result<()>
+where
+    W: Write + Seek + Send + Sync + 'static,
+{
+    let format = plan.format;
+    let record_len = usize::from(format.len());
+    let base = record_len - usize::from(format.extra_bytes);
+    let transforms = [plan.transforms.x, plan.transforms.y, plan.transforms.z];
+    let mut start = 0;
+    let mut value = Vec::with_capacity(8);
+    while start < rows {
+        let end = rows.min(start + CHUNK_POINTS);
+        let mut bytes = vec![0u8; (end - start) * record_len];
+        for (row, record) in (start..end).zip(bytes.chunks_exact_mut(record_len)) {
+            for ((column, transform), at) in plan.xyz.iter().zip(&transforms).zip([0, 4, 8]) {
+                // The nearest step of the header's grid.
+                let stored = transform.inverse(f64_at(&column.data, row))?;
+                record[at..at + 4].copy_from_slice(&stored.to_le_bytes());
+            }
+            for f in &plan.defaults {
+                // One return of one, as a single-return scanner would record.
+                if matches!(f.name, "return_number" | "number_of_returns") {
+                    dims::encode(record, f, Scalar::U8(1));
+                }
+            }
+            for (f, column) in &plan.standard {
+                if let Some(v) = column_value(&column.data, row) {
+                    dims::encode(record, f, v);
+                }
+            }
+            let mut at = base;
+            for column in &plan.extra {
+                value.clear();
+                let ty = extra::column_type(&column.data);
+                if let Some(v) = column_value(&column.data, row) {
+                    v.push_le(&mut value);
+                }
+                value.resize(ty.size(), 0);
+                record[at..at + ty.size()].copy_from_slice(&value);
+                at += ty.size();
+            }
+        }
+        let data = PointDataBuilder::new()
+            .for_header(writer.header())
+            .build_from_bytes(bytes)?;
+        writer.write_points(&data)?;
+        start = end;
+    }
+    Ok(())
+}
+
+/// Writes the table as LAS (or LAZ if `compressed`) into an already open file, through a
+/// handle of its own (the `las` writer owns its stream).
+pub(crate) fn write_file(
+    out: &mut BufWriter<&File>,
+    file: &str,
+    columns: &[Column<'_>],
+    compressed: bool,
+    template: Option<&LasTemplate>,
+) -> Result<(), WriteError> {
+    let io_error = |error| WriteError::Io {
+        file: file.to_owned(),
+        error,
+    };
+    out.flush().map_err(io_error)?;
+    let handle = out.get_ref().try_clone().map_err(io_error)?;
+    let mut inner = write_to(BufWriter::new(handle), file, columns, compressed, template)?;
+    inner.flush().map_err(io_error)
+}
+
+/// Writes the table as LAS or LAZ to a stream that cannot seek (standard output), through
+/// memory.
+pub(crate) fn write_stream(
+    mut out: impl Write,
+    file: &str,
+    columns: &[Column<'_>],
+    compressed: bool,
+    template: Option<&LasTemplate>,
+) -> Result<(), WriteError> {
+    let bytes =
+        write_to(Cursor::new(Vec::new()), file, columns, compressed, template)?.into_inner();
+    out.write_all(&bytes)
+        .and_then(|()| out.flush())
+        .map_err(|error| WriteError::Io {
+            file: file.to_owned(),
+            error,
+        })
+}
