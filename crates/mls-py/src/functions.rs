@@ -1,0 +1,385 @@
+//! `curvature`, `normals` and `project`: the commands' steps through `mls_cli` on arrays.
+
+use mls_cli::evaluate::{self, CurvatureColumns};
+use mls_cli::pipeline::{self, Built, Timings};
+use mls_cli::{CurvatureOptions, Method, NormalsMode, SurfaceOptions};
+use mls_core::{Parallelism, Point};
+use numpy::PyArrayMethods;
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+
+use crate::result::{Table, scalars, vectors};
+use crate::{
+    CutoffArg, Input, POINTS, Summary, as_points, pipeline_error, scale_options, to_value_error,
+    warn,
+};
+
+/// Principal curvatures k1 ≥ k2, their directions, mean and Gaussian curvature at every point,
+/// as ``mlscurv curvature`` computes them (the same numbers, bit for bit).
+///
+/// Parameters
+/// ----------
+/// points : array_like, shape (N, 3)
+///     The cloud. A float64 C-contiguous array is used as it is, without a copy; other real
+///     dtypes and layouts are converted. At least 4 points, all finite.
+/// normals : array_like, shape (N, 3), optional
+///     Measured normals (as a file's ``nx ny nz``): zero ones are left out of the surface. When
+///     absent, normals are estimated (weighted covariance, 16 neighbours) and oriented as
+///     ``orient`` says. Normals that were themselves estimated from the points are better left
+///     out: the jet fits given normals as data.
+/// h : float, optional
+///     Gaussian scale, in the units of the points. Default: ``h_factor`` × the median local
+///     spacing.
+/// h_factor : float, optional
+///     h as a multiple of the median local spacing (default 2); not with ``h``.
+/// cutoff : float or "none" or None
+///     Kernel truncated at ``cutoff`` · h (at least 2; default 5), or untruncated.
+/// method : "jet" or "paper"
+///     ``"jet"`` (default): weighted degree-4 fits with the support chosen per point and a
+///     predicted error (``k1_sd``, ``k2_sd``). ``"paper"``: the Amenta–Kil MLS surface in closed
+///     form (Yang & Qian 2007).
+/// at : "input" or "projected"
+///     Evaluate at the input points (default) or at their projections onto the surface.
+/// orient : str
+///     Orientation of estimated normals: ``"mst"`` (outward; default), ``"up"``,
+///     ``"viewpoint:X,Y,Z"`` or ``"none"``.
+/// adaptive : bool
+///     A scale per point, from h up to 4 h (adds ``h`` and ``noise``); ``method="paper"`` only.
+/// threads : int, optional
+///     Worker threads (default: all cores).
+///
+/// Returns
+/// -------
+/// Result
+///     ``points`` (the input array itself with ``at="input"``, the projections with
+///     ``"projected"``), ``normals``, ``k1``, ``k2``, ``mean``, ``gauss``, ``d1``, ``d2``,
+///     ``k1_sd`` and ``k2_sd`` (jet), ``h`` and ``noise`` (adaptive), ``status`` (int32; 0 =
+///     ok, else NaN numbers, see ``mlscurv.STATUS``). Positive curvature bends away from the
+///     normal: a sphere with outward normals has k1 = k2 = 1/R.
+///
+/// Raises
+/// ------
+/// ValueError
+///     Wrong shape, a non-finite value, fewer than 4 points, a bad option, or an h the
+///     command refuses; with the command's message.
+/// TypeError
+///     An array of a dtype that is not a real number.
+///
+/// Examples
+/// --------
+/// >>> import numpy as np, mlscurv
+/// >>> rng = np.random.default_rng(1)
+/// >>> p = rng.normal(size=(4000, 3))
+/// >>> p /= np.linalg.norm(p, axis=1, keepdims=True)   # the unit sphere
+/// >>> r = mlscurv.curvature(p)
+/// >>> bool(np.all(r.status == 0)), round(float(np.median(r.mean)), 2)
+/// (True, 1.0)
+/// >>> r.keys()[:10]
+/// ['x', 'y', 'z', 'nx', 'ny', 'nz', 'k1', 'k2', 'mean', 'gauss']
+/// >>> r.points is p        # float64 C-contiguous input is not copied
+/// True
+#[pyfunction]
+#[pyo3(signature = (
+    points, normals=None, *, h=None, h_factor=None, cutoff=Some(CutoffArg::Factor(5.0)),
+    method="jet", at="input", orient="mst", adaptive=false, threads=None
+))]
+#[pyo3(
+    text_signature = "(points, normals=None, *, h=None, h_factor=2.0, cutoff=5.0, method='jet', at='input', orient='mst', adaptive=False, threads=None)"
+)]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn curvature<'py>(
+    py: Python<'py>,
+    points: &Bound<'py, PyAny>,
+    normals: Option<&Bound<'py, PyAny>>,
+    h: Option<f64>,
+    h_factor: Option<f64>,
+    cutoff: Option<CutoffArg>,
+    method: &str,
+    at: &str,
+    orient: &str,
+    adaptive: bool,
+    threads: Option<usize>,
+) -> PyResult<Table> {
+    let (h, h_factor) = scale_options(h, h_factor)?;
+    let options = CurvatureOptions {
+        surface: SurfaceOptions {
+            h,
+            h_factor,
+            cutoff: crate::cutoff(cutoff)?,
+            normals: NormalsMode::Auto,
+            orient: crate::orient(orient)?,
+        },
+        method: crate::method(method)?,
+        at: crate::at(at)?,
+        adaptive,
+    };
+    let threads = crate::threads(threads)?;
+    if options.adaptive && options.method == Method::Jet {
+        return Err(PyValueError::new_err(mls_cli::ADAPTIVE_NEEDS_PAPER));
+    }
+    let Input { array, normals } = Input::new(points, normals)?;
+    let readonly = array.readonly();
+    let points = as_points(readonly.as_slice().map_err(to_value_error)?);
+    let points: &[Point] = &points;
+    let (out, summary) = py
+        .detach(|| {
+            pipeline::with_threads(threads, || {
+                let mut t = Timings::default();
+                let mut warnings = Vec::new();
+                let Built {
+                    scale,
+                    normals_source,
+                    normals_from_file,
+                    surface,
+                } = pipeline::build_surface(
+                    points,
+                    normals,
+                    POINTS,
+                    &options.surface,
+                    &mut t,
+                    |w| warnings.push(w),
+                    evaluate::curvature_surface(options.adaptive),
+                )?;
+                let jet = evaluate::jet_config(normals_from_file);
+                let out = t.time(evaluate::curvature_label(options.at), || {
+                    evaluate::curvature(points, &surface, &options, &jet, false)
+                });
+                let summary = Summary {
+                    scale,
+                    normals_source,
+                    timings: t,
+                    warnings,
+                };
+                Ok((out, summary))
+            })
+        })
+        .map_err(pipeline_error)?;
+    drop(readonly);
+    warn(py, &summary.warnings)?;
+    let columns: Vec<String> = out.columns(&[]).iter().map(|c| c.name.to_owned()).collect();
+    let CurvatureColumns {
+        normal,
+        k1,
+        k2,
+        mean,
+        gauss,
+        d1,
+        d2,
+        status,
+        h,
+        noise,
+        k1_sd,
+        k2_sd,
+        projected,
+        adaptive,
+        jet,
+    } = out;
+    let positions = match projected {
+        Some(p) => vectors(py, p)?,
+        None => array.into_any().unbind(),
+    };
+    let mut arrays = vec![
+        ("points", positions),
+        ("normals", vectors(py, normal)?),
+        ("k1", scalars(py, k1)),
+        ("k2", scalars(py, k2)),
+        ("mean", scalars(py, mean)),
+        ("gauss", scalars(py, gauss)),
+        ("d1", vectors(py, d1)?),
+        ("d2", vectors(py, d2)?),
+    ];
+    if adaptive {
+        arrays.push(("h", scalars(py, h)));
+        arrays.push(("noise", scalars(py, noise)));
+    }
+    if jet {
+        arrays.push(("k1_sd", scalars(py, k1_sd)));
+        arrays.push(("k2_sd", scalars(py, k2_sd)));
+    }
+    arrays.push(("status", scalars(py, status)));
+    Ok(Table::new("curvature", columns, arrays, summary))
+}
+
+/// Estimated and oriented normals, as ``mlscurv normals`` computes them.
+///
+/// Parameters
+/// ----------
+/// points : array_like, shape (N, 3)
+///     The cloud (at least 4 finite points; float64 C-contiguous input is not copied).
+/// h, h_factor : float, optional
+///     The scale that weighs the neighbours, as for ``curvature``.
+/// orient : str
+///     ``"mst"`` (outward, by minimum spanning tree; default), ``"up"`` (+z, airborne scans),
+///     ``"viewpoint:X,Y,Z"`` (towards a scanner) or ``"none"``.
+/// threads : int, optional
+///     Worker threads (default: all cores).
+///
+/// Returns
+/// -------
+/// Result
+///     ``points`` (the input array), ``normals`` (unit; 0 0 0 where none could be estimated)
+///     and ``status`` (0, or 7 = normal_estimation_failed).
+///
+/// Examples
+/// --------
+/// >>> import numpy as np, mlscurv
+/// >>> g = np.stack(np.meshgrid(np.arange(20.0), np.arange(20.0)), -1).reshape(-1, 2)
+/// >>> plane = np.column_stack([g, np.zeros(len(g))])
+/// >>> r = mlscurv.normals(plane, orient="up")
+/// >>> r.normals[0].tolist(), r.keys()
+/// ([0.0, 0.0, 1.0], ['x', 'y', 'z', 'nx', 'ny', 'nz', 'status'])
+#[pyfunction]
+#[pyo3(signature = (points, *, h=None, h_factor=None, orient="mst", threads=None))]
+#[pyo3(text_signature = "(points, *, h=None, h_factor=2.0, orient='mst', threads=None)")]
+pub(crate) fn normals<'py>(
+    py: Python<'py>,
+    points: &Bound<'py, PyAny>,
+    h: Option<f64>,
+    h_factor: Option<f64>,
+    orient: &str,
+    threads: Option<usize>,
+) -> PyResult<Table> {
+    let (h, h_factor) = scale_options(h, h_factor)?;
+    let orient = crate::orient(orient)?;
+    let threads = crate::threads(threads)?;
+    let Input { array, .. } = Input::new(points, None)?;
+    let readonly = array.readonly();
+    let points = as_points(readonly.as_slice().map_err(to_value_error)?);
+    let points: &[Point] = &points;
+    let ((normal, status), summary) = py
+        .detach(|| {
+            pipeline::with_threads(threads, || {
+                let mut t = Timings::default();
+                let par = Parallelism::Rayon;
+                let scale = t.time("spacing", || {
+                    pipeline::choose_h(points, h, h_factor, par, POINTS)
+                })?;
+                let est = t.time("normals", || {
+                    pipeline::normals(
+                        None,
+                        points,
+                        NormalsMode::Estimate,
+                        orient,
+                        scale.h,
+                        par,
+                        POINTS,
+                    )
+                })?;
+                let summary = Summary {
+                    scale,
+                    normals_source: est.source,
+                    timings: t,
+                    warnings: Vec::new(),
+                };
+                Ok((evaluate::normals_columns(&est.normals), summary))
+            })
+        })
+        .map_err(pipeline_error)?;
+    drop(readonly);
+    let arrays = vec![
+        ("points", array.into_any().unbind()),
+        ("normals", vectors(py, normal)?),
+        ("status", scalars(py, status)),
+    ];
+    Ok(Table::new("normals", names(&XYZ_N_STATUS), arrays, summary))
+}
+
+/// The columns of `mlscurv normals` and `mlscurv project`.
+pub(crate) const XYZ_N_STATUS: [&str; 7] = ["x", "y", "z", "nx", "ny", "nz", "status"];
+
+pub(crate) fn names(names: &[&str]) -> Vec<String> {
+    names.iter().map(|&n| n.to_owned()).collect()
+}
+
+/// The points projected onto the MLS surface (denoised), with its normals, as ``mlscurv
+/// project`` computes them.
+///
+/// Parameters are those of ``curvature`` (without ``method``, ``at`` and ``adaptive``).
+///
+/// Returns
+/// -------
+/// Result
+///     ``points`` (the projections; a point that failed keeps its position), ``normals`` (NaN
+///     where it failed) and ``status``.
+///
+/// Examples
+/// --------
+/// >>> import numpy as np, mlscurv
+/// >>> rng = np.random.default_rng(2)
+/// >>> p = rng.normal(size=(3000, 3))
+/// >>> p /= np.linalg.norm(p, axis=1, keepdims=True)
+/// >>> noisy = p * (1 + 0.002 * rng.normal(size=(3000, 1)))
+/// >>> r = mlscurv.project(noisy)
+/// >>> radius = lambda q: np.linalg.norm(q, axis=1)
+/// >>> bool(np.all(r.status == 0)), round(float(radius(noisy).std()), 4), round(float(radius(r.points).std()), 4)
+/// (True, 0.002, 0.0011)
+/// >>> round(float(np.median(radius(r.points))), 3)    # the MLS surface lies inside: about h²/2
+/// 0.994
+#[pyfunction]
+#[pyo3(signature = (
+    points, normals=None, *, h=None, h_factor=None, cutoff=Some(CutoffArg::Factor(5.0)),
+    orient="mst", threads=None
+))]
+#[pyo3(
+    text_signature = "(points, normals=None, *, h=None, h_factor=2.0, cutoff=5.0, orient='mst', threads=None)"
+)]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn project<'py>(
+    py: Python<'py>,
+    points: &Bound<'py, PyAny>,
+    normals: Option<&Bound<'py, PyAny>>,
+    h: Option<f64>,
+    h_factor: Option<f64>,
+    cutoff: Option<CutoffArg>,
+    orient: &str,
+    threads: Option<usize>,
+) -> PyResult<Table> {
+    let (h, h_factor) = scale_options(h, h_factor)?;
+    let options = SurfaceOptions {
+        h,
+        h_factor,
+        cutoff: crate::cutoff(cutoff)?,
+        normals: NormalsMode::Auto,
+        orient: crate::orient(orient)?,
+    };
+    let threads = crate::threads(threads)?;
+    let Input { array, normals } = Input::new(points, normals)?;
+    let readonly = array.readonly();
+    let points = as_points(readonly.as_slice().map_err(to_value_error)?);
+    let points: &[Point] = &points;
+    let (out, summary) = py
+        .detach(|| {
+            pipeline::with_threads(threads, || {
+                let mut t = Timings::default();
+                let mut warnings = Vec::new();
+                let built = pipeline::build_surface(
+                    points,
+                    normals,
+                    POINTS,
+                    &options,
+                    &mut t,
+                    |w| warnings.push(w),
+                    pipeline::fixed_surface,
+                )?;
+                let out = t.time("projection", || {
+                    evaluate::projection(points, &built.surface, false)
+                });
+                let summary = Summary {
+                    scale: built.scale,
+                    normals_source: built.normals_source,
+                    timings: t,
+                    warnings,
+                };
+                Ok((out, summary))
+            })
+        })
+        .map_err(pipeline_error)?;
+    drop(readonly);
+    warn(py, &summary.warnings)?;
+    let arrays = vec![
+        ("points", vectors(py, out.points)?),
+        ("normals", vectors(py, out.normal)?),
+        ("status", scalars(py, out.status)),
+    ];
+    Ok(Table::new("project", names(&XYZ_N_STATUS), arrays, summary))
+}
