@@ -13,7 +13,10 @@ mod figures;
 mod paper;
 mod robustness;
 mod validate;
+mod validate_formulas;
+mod validate_jet;
 mod validate_shapes;
+mod validate_sweep;
 
 const TASKS: &str = "\
 Tasks:
