@@ -96,6 +96,10 @@ pub(crate) enum Q {
     NormalStatus,
     ExpWeight,
     ExpAny,
+    AdaptiveChoice,
+    AdaptiveK,
+    AdaptiveNoise,
+    AdaptiveScatter,
     JetK1,
     JetK2,
     JetError,
@@ -111,7 +115,7 @@ struct Row {
 }
 
 const CURV: &str = "`curvature_at_points`, `project_points` / `mls_ad::witness`";
-const ROWS: [Row; 26] = [
+const ROWS: [Row; 30] = [
     row("n", THRESHOLD, CURV),
     row("J", THRESHOLD, CURV),
     row("∂²n", THRESHOLD, CURV),
@@ -166,6 +170,26 @@ const ROWS: [Row; 26] = [
     ),
     row("exp_weight (ulps)", 1.0, "`field::exp_weight` / `f64::exp`"),
     row("exp_any (ulps)", 1.0, "`field::exp_any` / `f64::exp`"),
+    row(
+        "adaptive scale and extrapolation choice",
+        0.0,
+        "`adaptive_curvature` / `mls_ad::adaptive_witness`",
+    ),
+    row(
+        "adaptive k1, k2, mean, gauss",
+        THRESHOLD,
+        "`adaptive_curvature` / `mls_ad::adaptive_witness`",
+    ),
+    row(
+        "adaptive noise σ (as σ²·dof / Σwr²)",
+        THRESHOLD,
+        "`adaptive_curvature` / `mls_ad::adaptive_witness`",
+    ),
+    row(
+        "adaptive predicted scatter",
+        THRESHOLD,
+        "`adaptive_curvature` / `mls_ad::adaptive_witness`",
+    ),
     row(
         "jet k1",
         THRESHOLD,

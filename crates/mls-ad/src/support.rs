@@ -3,9 +3,10 @@
 //! and the thresholds of `docs/derivation.md` applied to sums recomputed here.
 
 use mls_core::{PointStatus, Sample};
-use nalgebra::Vector3;
+use nalgebra::{Matrix3, Vector3};
+use num_dual::hessian;
 
-use crate::{Witness, log_scale, witness};
+use crate::{Witness, implicit, log_scale, witness};
 
 /// Below this ratio `|Σ w v| / Σ w` the weighted normals cancel and n(x) is undefined
 /// (`docs/derivation.md`; written here, not imported, so that a changed threshold in mls-core
@@ -35,6 +36,33 @@ pub fn classify(
     inv_h2: f64,
     min_neighbours: usize,
 ) -> Result<Witness, PointStatus> {
+    let sum = normal_verdict(x, support, inv_h2, min_neighbours)?;
+    let w = witness(x, support, inv_h2);
+    gradient_verdict(&w.gradient, sum)?;
+    Ok(w)
+}
+
+/// [`classify`] for g alone: `(∇g, H)` by one hyper-dual Hessian (no derivatives of n).
+pub fn classify_g(
+    x: &Vector3<f64>,
+    support: &[Sample],
+    inv_h2: f64,
+    min_neighbours: usize,
+) -> Result<(Vector3<f64>, Matrix3<f64>), PointStatus> {
+    let sum = normal_verdict(x, support, inv_h2, min_neighbours)?;
+    let shift = log_scale(x, support, inv_h2);
+    let (_, gradient, hessian) = hessian(|v| implicit(&v, support, inv_h2, shift), x);
+    gradient_verdict(&gradient, sum)?;
+    Ok((gradient, hessian))
+}
+
+/// Too few samples, or weighted normals that cancel; else the shifted `Σ w`.
+fn normal_verdict(
+    x: &Vector3<f64>,
+    support: &[Sample],
+    inv_h2: f64,
+    min_neighbours: usize,
+) -> Result<f64, PointStatus> {
     if support.is_empty() {
         return Err(PointStatus::NoNeighbours);
     }
@@ -49,11 +77,14 @@ pub fn classify(
     if !(m.norm() >= COHERENCE_FLOOR * sum) {
         return Err(PointStatus::NormalUndefined);
     }
-    let w = witness(x, support, inv_h2);
-    if !(w.gradient.norm() > GRADIENT_FLOOR * 2.0 * sum) {
+    Ok(sum)
+}
+
+fn gradient_verdict(gradient: &Vector3<f64>, sum: f64) -> Result<(), PointStatus> {
+    if !(gradient.norm() > GRADIENT_FLOOR * 2.0 * sum) {
         return Err(PointStatus::GradientVanishes);
     }
-    Ok(w)
+    Ok(())
 }
 
 /// `Σ w` at `x` without the shift: the unscaled weight sum of the Gaussian kernel.
