@@ -152,6 +152,27 @@ const FAULTS: &[Fault] = &[
         replacement: "let k1 = curvature.k1 / (1.0 - curvature.k1 * delta);",
     },
     Fault {
+        name: "A1 predicted scatter with √Σw",
+        description: "the adaptive scatter C σ/(h² √(2Σw)) written C σ/(h² √Σw)",
+        file: "crates/mls-core/src/adaptive.rs",
+        original: "unit_scatter: 1.0 / (h * h * (2.0 * weight_sum).sqrt()),",
+        replacement: "unit_scatter: 1.0 / (h * h * weight_sum.sqrt()),",
+    },
+    Fault {
+        name: "A2 Richardson bias over h_b² + h_a²",
+        description: "the h² bias c h_a² = h_a² (k_b − k_a)/(h_b² − h_a²) with h_b² + h_a² in the denominator",
+        file: "crates/mls-core/src/adaptive.rs",
+        original: "let bias = |a: f64, b: f64| ha2 * (b - a) / (hb2 - ha2);",
+        replacement: "let bias = |a: f64, b: f64| ha2 * (b - a) / (hb2 + ha2);",
+    },
+    Fault {
+        name: "A3 noise dof without the leverage",
+        description: "σ² = RSS/Σw instead of RSS/(Σw − Σ w h_ii): the fitted terms' degrees of freedom not removed",
+        file: "crates/mls-core/src/adaptive.rs",
+        original: "let dof = sw - leverage;",
+        replacement: "let dof = sw;",
+    },
+    Fault {
         name: "NE1 centroid not normalised",
         description: "the printed c = Σθq (erratum E2) instead of Σθq/Σθ (issue 12's audit)",
         file: "crates/mls-core/src/normals/estimate.rs",
@@ -264,6 +285,19 @@ pub(crate) fn run(only: &[String]) -> Result<()> {
         let caught = !output.status.success() && stderr.contains("validation failed");
         if let Some(line) = stderr.lines().find(|l| l.contains("validation failed")) {
             eprintln!("   {line}");
+        }
+        if !caught {
+            // A crash or a pass: the end of its output says which.
+            for line in stderr
+                .lines()
+                .rev()
+                .take(3)
+                .collect::<Vec<_>>()
+                .into_iter()
+                .rev()
+            {
+                eprintln!("   {line}");
+            }
         }
         missed += usize::from(!caught);
         eprintln!(

@@ -3,10 +3,10 @@
 
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
+use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
 
 use anyhow::{Result, bail};
-use rayon::prelude::*;
 
 use crate::validate_shapes as cases;
 use crate::validate_sweep::{QUERIES_PER_CASE, one_case};
@@ -386,13 +386,35 @@ that makes a direction meaningful only as far as the eigengap allows; Eq. 5 agai
 
 ";
 
-/// Runs cases until `target` evaluations, in parallel, each case seeded from the base seed.
+/// Runs cases until `target` evaluations, each case seeded from the base seed, on one OS
+/// thread per core. Not on rayon's pool: a case runs production entry points inside pools of
+/// its own, and a rayon worker that blocks on another pool steals further cases while it
+/// waits, nesting them on its stack until it overflows.
 fn differential(base_seed: u64, target: usize) -> Tally {
     let cases = target.div_ceil(QUERIES_PER_CASE).max(1);
-    (0..cases)
-        .into_par_iter()
-        .map(|c| one_case(case_seed(base_seed, c as u64), QUERIES_PER_CASE))
-        .reduce(Tally::default, Tally::merge)
+    let next = AtomicUsize::new(0);
+    let threads = std::thread::available_parallelism().map_or(2, |n| n.get());
+    std::thread::scope(|scope| {
+        let workers: Vec<_> = (0..threads)
+            .map(|_| {
+                scope.spawn(|| {
+                    let mut tally = Tally::default();
+                    loop {
+                        let c = next.fetch_add(1, Ordering::Relaxed);
+                        if c >= cases {
+                            return tally;
+                        }
+                        tally =
+                            tally.merge(one_case(case_seed(base_seed, c as u64), QUERIES_PER_CASE));
+                    }
+                })
+            })
+            .collect();
+        workers
+            .into_iter()
+            .map(|w| w.join().expect("a validation worker panicked"))
+            .fold(Tally::default(), Tally::merge)
+    })
 }
 
 fn case_seed(base: u64, case: u64) -> u64 {
