@@ -7,7 +7,7 @@ use mls_core::{
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
 
-use crate::validate::{Q, Tally};
+use crate::validate::{Q, THRESHOLD, Tally};
 use crate::validate_shapes as cases;
 
 /// Queries per case for the adaptive estimate (each walks five scales).
@@ -87,12 +87,15 @@ pub(crate) fn check_adaptive(
         let dmean = (p.curvature.mean - 0.5 * (w.k1 + w.k2)).abs() / w.kappa;
         let dgauss = (p.curvature.gauss - w.k1 * w.k2).abs() / (w.kappa * w.kappa);
         tally.record(Q::AdaptiveK, dmean.max(dgauss), seed);
-        // σ² = RSS/dof, with RSS formed by the production as Σwr² − explained: compared
-        // through RSS against Σwr², the size its cancellation is relative to.
+        // σ² = RSS/dof, with RSS formed by the production as Σwr² − explained, explained
+        // through the normal matrix: compared through RSS against Σwr², the size its
+        // cancellation is relative to, and against the rounding cond·ε of any route through
+        // the normal matrix where that exceeds the threshold (as for the jet).
         let rss = |s: f64| s * s * w.noise_dof;
+        let rounding = (1e3 * f64::EPSILON * w.noise_condition / THRESHOLD).max(1.0);
         tally.record(
             Q::AdaptiveNoise,
-            (rss(p.noise) - rss(w.noise)).abs() / w.noise_srr,
+            (rss(p.noise) - rss(w.noise)).abs() / w.noise_srr / rounding,
             seed,
         );
         // The scatter's own formula C σ/(h² √(2Σw)), on the production's σ.

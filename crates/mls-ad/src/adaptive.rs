@@ -29,6 +29,9 @@ pub struct AdaptiveWitness {
     pub noise_srr: f64,
     /// Residual degrees of freedom of the noise fit.
     pub noise_dof: f64,
+    /// Condition number of the noise fit's normal matrix `Σ w φ φᵀ`: a route through it (as
+    /// mls-core's Cholesky) carries rounding of about `condition · ε · Σ w r²` in the residual.
+    pub noise_condition: f64,
     /// The curvature scale ‖H‖/‖∇g‖ at the chosen scale.
     pub kappa: f64,
     /// `1/(h² √(2 Σw))` at the chosen scale.
@@ -68,7 +71,7 @@ pub fn adaptive_witness(
 ) -> Option<AdaptiveWitness> {
     let scales = ladder.scales.max(2);
     let mut estimates: Vec<Estimate> = Vec::new();
-    let mut noise: Option<(f64, f64, f64)> = None;
+    let mut noise: Option<NoiseFit> = None;
     let mut lower = [f64::NEG_INFINITY; 2];
     let mut upper = [f64::INFINITY; 2];
     let mut chosen = None;
@@ -99,7 +102,7 @@ pub fn adaptive_witness(
             partner = Some(index);
             break;
         }
-        let sd = ladder.gain * noise.map_or(0.0, |n| n.0) * estimates[index].unit_scatter;
+        let sd = ladder.gain * noise.map_or(0.0, |n| n.sigma) * estimates[index].unit_scatter;
         let mut agree = true;
         for c in 0..2 {
             lower[c] = lower[c].max(estimates[index].k[c] - ladder.confidence * sd);
@@ -116,7 +119,12 @@ pub fn adaptive_witness(
         }
     }
     let e = &estimates[chosen?];
-    let (sigma, srr, dof) = noise.unwrap_or((0.0, 0.0, 0.0));
+    let NoiseFit {
+        sigma,
+        srr,
+        dof,
+        condition,
+    } = noise.unwrap_or_default();
     let scatter = ladder.gain * sigma * e.unit_scatter;
     let mut k = e.k;
     let mut extrapolated = false;
@@ -138,9 +146,19 @@ pub fn adaptive_witness(
         extrapolated,
         noise_srr: srr,
         noise_dof: dof,
+        noise_condition: condition,
         kappa: e.kappa,
         unit_scatter: e.unit_scatter,
     })
+}
+
+/// The noise fit's outcome.
+#[derive(Clone, Copy, Debug, Default)]
+struct NoiseFit {
+    sigma: f64,
+    srr: f64,
+    dof: f64,
+    condition: f64,
 }
 
 /// σ of the samples within 2h of `x` off the local quadric `n·d + ½ dᵀ S d` (S the shape
@@ -153,7 +171,7 @@ fn noise_fit(
     h: f64,
     gradient: &Vector3<f64>,
     hessian: &Matrix3<f64>,
-) -> Option<(f64, f64, f64)> {
+) -> Option<NoiseFit> {
     let len = gradient.norm();
     let n = gradient / len;
     let p = Matrix3::identity() - n * n.transpose();
@@ -204,8 +222,17 @@ fn noise_fit(
     let leverage: f64 = (0..m).map(|i| rows[i].0 * q.row(i).norm_squared()).sum();
     let srr = b.norm_squared();
     let dof = sw - leverage;
-    if !(sw > 0.0 && dof > 3.0 * sw / m as f64) {
-        return Some((0.0, srr, dof));
-    }
-    Some(((rss.max(0.0) / dof).sqrt(), srr, dof))
+    let singular = r.singular_values();
+    let condition = (singular.max() / singular.min()).powi(2);
+    let sigma = if sw > 0.0 && dof > 3.0 * sw / m as f64 {
+        (rss.max(0.0) / dof).sqrt()
+    } else {
+        0.0
+    };
+    Some(NoiseFit {
+        sigma,
+        srr,
+        dof,
+        condition,
+    })
 }
