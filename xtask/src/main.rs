@@ -22,7 +22,8 @@ mod validate_sweep;
 const TASKS: &str = "\
 Tasks:
   validate [--quick] [--seed N] [--evals N] [--replay SEED] [--differential-only]
-                 Closed form against hyper-dual AD on seeded random clouds, and analytic shapes.
+                 Production entry points against the witnesses of mls-ad on seeded random
+                 clouds, analytic shapes, then the robustness sweep.
                  Writes target/validate/report.md. --quick: a small run for CI.
   faults [NAME-PREFIX...]
                  Applies each fault (a misreading of the paper, or a 1e-9 perturbation of one
