@@ -61,6 +61,139 @@ const FAULTS: &[Fault] = &[
         replacement: "s2[c].matrix() * (2.0 * a * a)",
     },
     Fault {
+        name: "F7 β's 3aB² by (1 + 1e-9)",
+        description: "near threshold: β = 1 − 3aB² with 3(1 + 1e-9) (∇g and H move by about 1e-9 relative)",
+        file: "crates/mls-core/src/field.rs",
+        original: "let beta = 1.0 - 3.0 * a * b2;",
+        replacement: "let beta = 1.0 - 3.0 * (1.0 + 1e-9) * a * b2;",
+    },
+    Fault {
+        name: "G1 gradient threshold 1e-12 → 0.6",
+        description: "MIN_GRADIENT_RATIO raised until 16 % of evaluations are skipped as GradientVanishes (issue 12's audit)",
+        file: "crates/mls-core/src/field.rs",
+        original: "pub const MIN_GRADIENT_RATIO: f64 = 1e-12;",
+        replacement: "pub const MIN_GRADIENT_RATIO: f64 = 0.6;",
+    },
+    Fault {
+        name: "X1 exp's P1 by (1 + 1e-9)",
+        description: "near threshold: the first coefficient of the kernels' exp polynomial off by 1e-9 relative",
+        file: "crates/mls-core/src/field.rs",
+        original: "const P1: f64 = 1.666_666_666_666_660_2e-1;",
+        replacement: "const P1: f64 = 1.666_666_666_666_660_2e-1 * (1.0 + 1e-9);",
+    },
+    Fault {
+        name: "X2 exp's ln 2 split without its low part",
+        description: "r = x − k ln2_hi, dropping the k ln2_lo correction (weights off by up to 1e-7 relative)",
+        file: "crates/mls-core/src/field.rs",
+        original: "let lo = kf * LN2_LO;",
+        replacement: "let lo = kf * 0.0 * LN2_LO;",
+    },
+    Fault {
+        name: "S1 search radius × 0.64",
+        description: "the k-d tree query radius 0.64 × cutoff·h (issue 12's audit)",
+        file: "crates/mls-core/src/surface.rs",
+        original: ".within::<SquaredEuclidean<f64>>(radius * radius)",
+        replacement: ".within::<SquaredEuclidean<f64>>((0.64 * radius) * (0.64 * radius))",
+    },
+    Fault {
+        name: "S2 cluster reach = radius",
+        description: "a cluster's shared search reaches the support radius from its centre, not radius + spread (issue 12's audit)",
+        file: "crates/mls-core/src/surface.rs",
+        original: "let reach = radius + spread;",
+        replacement: "let reach = radius;",
+    },
+    Fault {
+        name: "C1 mean of the shape operator by (1 + 1e-9)",
+        description: "near threshold: mean = (S11 + S22)/2 · (1 + 1e-9), so k1, k2 and mean move by 1e-9 · mean",
+        file: "crates/mls-core/src/curvature.rs",
+        original: "let mean = 0.5 * (a + c);",
+        replacement: "let mean = 0.5 * (1.0 + 1e-9) * (a + c);",
+    },
+    Fault {
+        name: "C2 principal angle halved twice",
+        description: "φ = ½ atan2(2 S12, S11 − S22) written ½ atan2(S12, S11 − S22)",
+        file: "crates/mls-core/src/curvature.rs",
+        original: "let angle = 0.5 * b.atan2(0.5 * (a - c));",
+        replacement: "let angle = 0.5 * b.atan2(a - c);",
+    },
+    Fault {
+        name: "P1 e″'s 10aB² by (1 + 1e-9)",
+        description: "near threshold: e″ = Σθ(2 − 10aB² + 4a²B⁴) with 10(1 + 1e-9)",
+        file: "crates/mls-core/src/projection.rs",
+        original: "theta[l] * (2.0 - 10.0 * ab2[l]",
+        replacement: "theta[l] * (2.0 - 10.0 * (1.0 + 1e-9) * ab2[l]",
+    },
+    Fault {
+        name: "P2 projection walks uphill",
+        description: "the line search heads along +e′ (towards the energy maxima, the spurious sheets)",
+        file: "crates/mls-core/src/projection.rs",
+        original: "-e1.signum()\n    } else if",
+        replacement: "e1.signum()\n    } else if",
+    },
+    Fault {
+        name: "P3 e′ cubic term 3aB³",
+        description: "e′ = Σ 2θ(B − aB³) misread as Σ 2θ(B − 3aB³) (d/dB of B³ taken twice)",
+        file: "crates/mls-core/src/projection.rs",
+        original: "2.0 * theta[l] * bb[l] * (1.0 - ab2[l])",
+        replacement: "2.0 * theta[l] * bb[l] * (1.0 - 3.0 * ab2[l])",
+    },
+    Fault {
+        name: "SH1 shrinkage δ by (1 + 1e-9)",
+        description: "near threshold: δ = (k1 + k2)h²/4 · (1 + 1e-9) in the shrinkage correction",
+        file: "crates/mls-core/src/adaptive.rs",
+        original: "let delta = 0.5 * curvature.mean * h * h;",
+        replacement: "let delta = 0.5 * (1.0 + 1e-9) * curvature.mean * h * h;",
+    },
+    Fault {
+        name: "SH2 shrinkage inverted the wrong way",
+        description: "k/(1 − kδ) (the parallel surface's curvature) applied instead of its inverse k/(1 + kδ)",
+        file: "crates/mls-core/src/adaptive.rs",
+        original: "let k1 = curvature.k1 / (1.0 + curvature.k1 * delta);",
+        replacement: "let k1 = curvature.k1 / (1.0 - curvature.k1 * delta);",
+    },
+    Fault {
+        name: "A1 predicted scatter with √Σw",
+        description: "the adaptive scatter C σ/(h² √(2Σw)) written C σ/(h² √Σw)",
+        file: "crates/mls-core/src/adaptive.rs",
+        original: "unit_scatter: 1.0 / (h * h * (2.0 * weight_sum).sqrt()),",
+        replacement: "unit_scatter: 1.0 / (h * h * weight_sum.sqrt()),",
+    },
+    Fault {
+        name: "A2 Richardson bias over h_b² + h_a²",
+        description: "the h² bias c h_a² = h_a² (k_b − k_a)/(h_b² − h_a²) with h_b² + h_a² in the denominator",
+        file: "crates/mls-core/src/adaptive.rs",
+        original: "let bias = |a: f64, b: f64| ha2 * (b - a) / (hb2 - ha2);",
+        replacement: "let bias = |a: f64, b: f64| ha2 * (b - a) / (hb2 + ha2);",
+    },
+    Fault {
+        name: "A3 noise dof without the leverage",
+        description: "σ² = RSS/Σw instead of RSS/(Σw − Σ w h_ii): the fitted terms' degrees of freedom not removed",
+        file: "crates/mls-core/src/adaptive.rs",
+        original: "let dof = sw - leverage;",
+        replacement: "let dof = sw;",
+    },
+    Fault {
+        name: "NE1 centroid not normalised",
+        description: "the printed c = Σθq (erratum E2) instead of Σθq/Σθ (issue 12's audit)",
+        file: "crates/mls-core/src/normals/estimate.rs",
+        original: "let c = moment / wsum;",
+        replacement: "let c = moment;",
+    },
+    Fault {
+        name: "NE2 neighbourhood without the point",
+        description: "the covariance of the k neighbours alone, the point itself left out",
+        file: "crates/mls-core/src/normals/estimate.rs",
+        original: "normal_from_neighbourhood(p, iter::once(p).chain(others), h, tolerance)",
+        replacement: "normal_from_neighbourhood(p, others.chain(iter::empty()), h, tolerance)",
+    },
+    Fault {
+        name: "NE3 covariance weights exp(−d²/h)",
+        description: "θ = exp(−|q − p|²/h) for exp(−|q − p|²/h²) in the covariance",
+        file: "crates/mls-core/src/normals/estimate.rs",
+        original: "let inv_h2 = 1.0 / (h * h);\n    // `f64::max`",
+        replacement: "let inv_h2 = 1.0 / h;\n    // `f64::max`",
+    },
+    Fault {
         name: "J1 slope sign",
         description: "the jet's slope data from a normal ν taken as +ν_u/ν_w instead of −ν_u/ν_w",
         file: "crates/mls-core/src/jet.rs",
@@ -90,14 +223,20 @@ const FAULTS: &[Fault] = &[
     },
 ];
 
-pub(crate) fn run() -> Result<()> {
+/// Runs every fault, or those whose name starts with one of `only`.
+pub(crate) fn run(only: &[String]) -> Result<()> {
     let work = Path::new("target/faults/work");
     let mut report = String::from(
         "# Fault injection\n\nEach fault is a source patch on a copy of the workspace; `cargo xtask validate --quick \
          --differential-only` then runs on the copy. Caught means it reported `validation failed`.\n\n| fault | misreading | result |\n| --- | --- | --- |\n",
     );
     let mut missed = 0;
-    for fault in FAULTS {
+    let mut count = 0;
+    let selected = FAULTS
+        .iter()
+        .filter(|f| only.is_empty() || only.iter().any(|o| f.name.starts_with(o.as_str())));
+    for fault in selected {
+        count += 1;
         copy_workspace(work)?;
         let path = work.join(fault.file);
         let source =
@@ -147,6 +286,19 @@ pub(crate) fn run() -> Result<()> {
         if let Some(line) = stderr.lines().find(|l| l.contains("validation failed")) {
             eprintln!("   {line}");
         }
+        if !caught {
+            // A crash or a pass: the end of its output says which.
+            for line in stderr
+                .lines()
+                .rev()
+                .take(3)
+                .collect::<Vec<_>>()
+                .into_iter()
+                .rev()
+            {
+                eprintln!("   {line}");
+            }
+        }
         missed += usize::from(!caught);
         eprintln!(
             "== {}: {}",
@@ -162,6 +314,7 @@ pub(crate) fn run() -> Result<()> {
         )?;
     }
     fs::create_dir_all("target/validate")?;
+    writeln!(report, "\n{} of {count} caught.", count - missed)?;
     fs::write("target/validate/faults.md", &report)?;
     println!("{report}");
     if missed > 0 {

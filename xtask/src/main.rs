@@ -13,15 +13,23 @@ mod figures;
 mod paper;
 mod robustness;
 mod validate;
+mod validate_adaptive;
+mod validate_formulas;
+mod validate_jet;
 mod validate_shapes;
+mod validate_sweep;
 
 const TASKS: &str = "\
 Tasks:
   validate [--quick] [--seed N] [--evals N] [--replay SEED] [--differential-only]
-                 Closed form against hyper-dual AD on seeded random clouds, and analytic shapes.
+                 Production entry points against the witnesses of mls-ad on seeded random
+                 clouds, analytic shapes, then the robustness sweep.
                  Writes target/validate/report.md. --quick: a small run for CI.
-  faults         Applies each known misreading of the paper to a copy of mls-core and checks
-                 that `validate --quick` catches it. Writes target/validate/faults.md.
+  faults [NAME-PREFIX...]
+                 Applies each fault (a misreading of the paper, or a 1e-9 perturbation of one
+                 term) to a copy of the workspace and checks that `validate --quick
+                 --differential-only` reports it; only the named ones if prefixes are given.
+                 Writes target/validate/faults.md.
   robustness [--quick] [--clouds N] [--seed N] [--replay SEED] [--fuzz SECONDS]
                  mls-core on 10,000 adversarial clouds (--quick: 400); --fuzz also runs each
                  cargo-fuzz reader target for SECONDS. Writes target/robustness/report.md.
@@ -56,7 +64,7 @@ fn main() -> Result<()> {
         "validate" => validate::run(&validate::Options::parse(rest)?),
         "accuracy" => accuracy::run(rest),
         "accuracy-explore" => accuracy::explore(rest),
-        "faults" => faults::run(),
+        "faults" => faults::run(rest),
         "robustness" => robustness::run(&robustness::Options::parse(rest)?),
         "bench" => bench::run(rest),
         "defaults" => defaults::run(),

@@ -1,23 +1,22 @@
 //! `cargo xtask validate`: the closed form of mls-core against the hyper-dual witness of mls-ad
 //! on seeded random clouds, and the curvature of analytic shapes against their exact values.
 
+use std::collections::BTreeMap;
 use std::fmt::Write as _;
+use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
 
 use anyhow::{Result, bail};
-use mls_core::{Cutoff, MlsConfig, MlsSurface, Point};
-use rand::{Rng, SeedableRng};
-use rand_chacha::ChaCha8Rng;
-use rayon::prelude::*;
 
-use crate::validate_shapes::{self as cases, CaseKind};
+use crate::validate_shapes as cases;
+use crate::validate_sweep::{QUERIES_PER_CASE, one_case};
 
 /// Differences above this fail the run.
-const THRESHOLD: f64 = 1e-10;
+pub(crate) const THRESHOLD: f64 = 1e-10;
 /// The jet's predicted error goes through M⁻¹ twice and through residuals, so two correct
 /// routes agree less closely than on k; it is also divided by the rounding factor of the fit's
 /// conditioning (see `NORMALISATION_NOTE`). Measured worst: 1.2e-7 (full run).
-const SD_THRESHOLD: f64 = 1e-5;
+pub(crate) const SD_THRESHOLD: f64 = 1e-5;
 /// Default base seed; every case derives its own seed from it and prints it when it is worst.
 const DEFAULT_SEED: u64 = 0x4d4c_5321;
 
@@ -72,25 +71,154 @@ fn parse_u64(v: Option<&String>) -> Result<u64> {
     })
 }
 
-/// The quantities compared, in report order.
-const QUANTITIES: [&str; 16] = [
-    "n",
-    "J",
-    "∂²n",
-    "g",
-    "∇g",
-    "H",
-    "gauss",
-    "mean",
-    "k1",
-    "k2",
-    "directions",
-    "Eq.5 = Eq.7",
-    "jet k1",
-    "jet k2",
-    "jet predicted error",
-    "jet support and degree",
+/// The rows of the report: one per quantity compared with its witness.
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum Q {
+    N,
+    J,
+    D2N,
+    G,
+    GradG,
+    H,
+    Gauss,
+    Mean,
+    K1,
+    K2,
+    Directions,
+    Eq5,
+    Status,
+    LineFirst,
+    LineSecond,
+    Stationarity,
+    Shrinkage,
+    NormalDirection,
+    NormalVariation,
+    NormalStatus,
+    ExpWeight,
+    ExpAny,
+    AdaptiveChoice,
+    AdaptiveK,
+    AdaptiveNoise,
+    AdaptiveScatter,
+    JetK1,
+    JetK2,
+    JetError,
+    JetChoice,
+}
+
+/// A row: its name, the threshold above which the run fails, the production entry point and
+/// the witness.
+struct Row {
+    name: &'static str,
+    threshold: f64,
+    entry: &'static str,
+}
+
+const CURV: &str = "`curvature_at_points`, `project_points` / `mls_ad::witness`";
+const ROWS: [Row; 30] = [
+    row("n", THRESHOLD, CURV),
+    row("J", THRESHOLD, CURV),
+    row("∂²n", THRESHOLD, CURV),
+    row("g", THRESHOLD, CURV),
+    row("∇g", THRESHOLD, CURV),
+    row("H", THRESHOLD, CURV),
+    row("gauss", THRESHOLD, CURV),
+    row("mean", THRESHOLD, CURV),
+    row("k1", THRESHOLD, CURV),
+    row("k2", THRESHOLD, CURV),
+    row("directions", THRESHOLD, CURV),
+    row("Eq.5 = Eq.7", THRESHOLD, CURV),
+    row(
+        "status (skip agreed by the witness)",
+        0.0,
+        "`curvature_at_points`, `project_points` / `mls_ad::classify`",
+    ),
+    row(
+        "projection e′",
+        THRESHOLD,
+        "`projection::line_derivatives` / `mls_ad::line_witness`",
+    ),
+    row(
+        "projection e″",
+        THRESHOLD,
+        "`projection::line_derivatives` / `mls_ad::line_witness`",
+    ),
+    row(
+        "projected point stationary",
+        THRESHOLD,
+        "`project_points` / `mls_ad::stationarity`",
+    ),
+    row(
+        "shrinkage correction",
+        THRESHOLD,
+        "`correct_shrinkage` / δ = (k1 + k2)h²/4, k/(1 + kδ)",
+    ),
+    row(
+        "estimated normal",
+        THRESHOLD,
+        "`estimate_normals` / `mls_ad::normal_witness`",
+    ),
+    row(
+        "estimated normal's variation",
+        THRESHOLD,
+        "`estimate_normals` / `mls_ad::normal_witness`",
+    ),
+    row(
+        "normal estimation status",
+        0.0,
+        "`estimate_normals` / `mls_ad::normal_witness`",
+    ),
+    row("exp_weight (ulps)", 1.0, "`field::exp_weight` / `f64::exp`"),
+    row("exp_any (ulps)", 1.0, "`field::exp_any` / `f64::exp`"),
+    row(
+        "adaptive scale and extrapolation choice",
+        0.0,
+        "`adaptive_curvature` / `mls_ad::adaptive_witness`",
+    ),
+    row(
+        "adaptive k1, k2, mean, gauss",
+        THRESHOLD,
+        "`adaptive_curvature` / `mls_ad::adaptive_witness`",
+    ),
+    row(
+        "adaptive noise σ (as σ²·dof / Σwr²)",
+        THRESHOLD,
+        "`adaptive_curvature` / `mls_ad::adaptive_witness`",
+    ),
+    row(
+        "adaptive predicted scatter",
+        THRESHOLD,
+        "`adaptive_curvature` / `mls_ad::adaptive_witness`",
+    ),
+    row(
+        "jet k1",
+        THRESHOLD,
+        "`jet_at_points` / `mls_ad::jet_witness`",
+    ),
+    row(
+        "jet k2",
+        THRESHOLD,
+        "`jet_at_points` / `mls_ad::jet_witness`",
+    ),
+    row(
+        "jet predicted error",
+        SD_THRESHOLD,
+        "`jet_at_points` / `mls_ad::jet_witness`",
+    ),
+    row(
+        "jet support and degree",
+        0.0,
+        "`jet_at_points` / `mls_ad::jet_witness`",
+    ),
 ];
+
+const fn row(name: &'static str, threshold: f64, entry: &'static str) -> Row {
+    Row {
+        name,
+        threshold,
+        entry,
+    }
+}
 
 #[derive(Clone, Copy, Debug, Default)]
 struct Worst {
@@ -100,21 +228,28 @@ struct Worst {
 }
 
 #[derive(Clone, Debug, Default)]
-struct Tally {
-    worst: [Worst; QUANTITIES.len()],
-    evals: usize,
-    skipped: usize,
+pub(crate) struct Tally {
+    worst: [Worst; ROWS.len()],
+    pub evals: usize,
+    /// Evaluations skipped with a status the witness agrees with.
+    pub skipped: usize,
+    /// Evaluations per production entry point and execution variant.
+    pub entries: BTreeMap<String, usize>,
 }
 
 impl Tally {
-    fn record(&mut self, k: usize, value: f64, seed: u64) {
-        let w = &mut self.worst[k];
+    pub fn record(&mut self, q: Q, value: f64, seed: u64) {
+        let w = &mut self.worst[q as usize];
         w.evals += 1;
         // NaN must count as a failure, never be skipped by a comparison.
         if value.is_nan() || value > w.value {
             w.value = if value.is_nan() { f64::INFINITY } else { value };
             w.seed = seed;
         }
+    }
+
+    pub fn entry(&mut self, name: String, count: usize) {
+        *self.entries.entry(name).or_default() += count;
     }
 
     fn merge(mut self, other: Self) -> Self {
@@ -127,6 +262,9 @@ impl Tally {
         }
         self.evals += other.evals;
         self.skipped += other.skipped;
+        for (k, v) in other.entries {
+            *self.entries.entry(k).or_default() += v;
+        }
         self
     }
 }
@@ -142,35 +280,50 @@ pub(crate) fn run(o: &Options) -> Result<()> {
         o.seed
     )?;
 
-    let tally = match o.replay {
+    let mut tally = match o.replay {
         Some(seed) => one_case(seed, QUERIES_PER_CASE),
         None => differential(o.seed, target),
     };
+    crate::validate_formulas::exp_sweep(&mut tally, if o.quick { 200_000 } else { 2_000_000 });
+    crate::validate_formulas::shrinkage_sweep(
+        &mut tally,
+        o.seed,
+        if o.quick { 20_000 } else { 200_000 },
+    );
     let elapsed = start.elapsed().as_secs_f64();
     writeln!(
         report,
-        "## Closed form against hyper-dual AD\n\n{} evaluations ({} skipped where n or ∇g is undefined) on {} cores in {elapsed:.1} s. \
-         Threshold {THRESHOLD:e} ({SD_THRESHOLD:e} for the jet's predicted error). Replay a case with `cargo xtask validate --replay <seed>`.\n",
+        "## Production entry points against independent witnesses\n\n{} evaluations on {} cores in {elapsed:.1} s; \
+         {} skipped with a status the witness also finds (any other skip fails the `status` row). \
+         Kernels of this CPU: {}. Replay a case with `cargo xtask validate --replay <seed>`.\n",
         tally.evals,
+        rayon::current_num_threads(),
         tally.skipped,
-        rayon::current_num_threads()
+        mls_core::field::kernel_isa(),
     )?;
-    report.push_str("| quantity | worst relative difference | seed of worst case | comparisons |\n| --- | --- | --- | --- |\n");
+    report.push_str(
+        "| quantity | worst relative difference | threshold | seed of worst case | comparisons | production / witness |\n\
+         | --- | --- | --- | --- | --- | --- |\n",
+    );
     let mut failed = Vec::new();
-    for (name, w) in QUANTITIES.iter().zip(tally.worst) {
+    for (row, w) in ROWS.iter().zip(&tally.worst) {
         writeln!(
             report,
-            "| {name} | {:.2e} | {:#x} | {} |",
-            w.value, w.seed, w.evals
+            "| {} | {:.2e} | {:e} | {:#x} | {} | {} |",
+            row.name,
+            w.value,
+            row.threshold,
+            w.seed,
+            w.evals,
+            row.entry.replace('|', "\\|")
         )?;
-        let threshold = if *name == "jet predicted error" {
-            SD_THRESHOLD
-        } else {
-            THRESHOLD
-        };
-        if !(w.value <= threshold) || w.evals == 0 {
-            failed.push(name.to_string());
+        if !(w.value <= row.threshold) || w.evals == 0 {
+            failed.push(row.name.to_string());
         }
+    }
+    report.push_str("\nEvaluations per production entry point and execution path:\n\n| entry point | evaluations |\n| --- | --- |\n");
+    for (entry, count) in &tally.entries {
+        writeln!(report, "| {entry} | {count} |")?;
     }
     report.push_str(NORMALISATION_NOTE);
 
@@ -199,6 +352,23 @@ pub(crate) fn run(o: &Options) -> Result<()> {
 }
 
 const NORMALISATION_NOTE: &str = "
+The curvature rows compare the production entry points `MlsSurface::curvature_at_points` (the
+clustered path the CLI uses; sequential and in rayon pools of 1–3 threads, with the AVX2 and
+the portable kernels) and `MlsSurface::project_points` (curvature at the projected point) with
+the hyper-dual witness, whose support is a brute-force distance filter over every sample of
+the cloud. The status row counts, as 1, every point where the production's status differs from
+the witness's own verdict (`mls_ad::classify`: no or too few samples, |Σwv|/Σw < 1e-6,
+|∇g| ≤ 1e-12·2Σw), and every projection that failed. The line rows compare e′(t), e″(t) on
+random lines with hyper-dual derivatives of the energy, each scaled by the sum of its terms'
+magnitudes; the stationarity row is |e′(0)|/(Σ|terms of e″|·h) at each projected point along
+the witness's n (stopping rule: steps below 1e-12·h), or 1 where e″(0) < 0 (a maximum). The
+shrinkage row scales the difference by max(|k − k_corrected|, 1e-5·max|k|): the correction's
+own size, floored where it vanishes so that rounding of k (ε|k|) stays below 1e-10. The
+normal rows compare `estimate_normals` (k = 16, h of the case) with a brute-force k-nearest
+neighbourhood and a Jacobi eigen-solve: sin(angle)·(λ1 − λ0)/λ2 (the Davis–Kahan bound makes a
+normal only as accurate as the eigengap allows) and the variation λ0/Σλ absolutely. The exp
+rows are the worst distance in units in the last place over a dense sweep of arguments.
+
 The jet rows compare `MlsSurface::jet_at_points` with `mls_ad::jet_witness` on the same queries
 (heights only or with slopes, at random). k1, k2 are scaled by κ = max(|k1|, |k2|, 1/h) and
 divided by max(1, 1e3·ε·cond(M)/threshold), the rounding any least-squares route carries on a
@@ -216,17 +386,36 @@ that makes a direction meaningful only as far as the eigengap allows; Eq. 5 agai
 
 ";
 
-/// Runs cases until `target` evaluations, in parallel, each case seeded from the base seed.
+/// Runs cases until `target` evaluations, each case seeded from the base seed, on one OS
+/// thread per core. Not on rayon's pool: a case runs production entry points inside pools of
+/// its own, and a rayon worker that blocks on another pool steals further cases while it
+/// waits, nesting them on its stack until it overflows.
 fn differential(base_seed: u64, target: usize) -> Tally {
     let cases = target.div_ceil(QUERIES_PER_CASE).max(1);
-    (0..cases)
-        .into_par_iter()
-        .map(|c| one_case(case_seed(base_seed, c as u64), QUERIES_PER_CASE))
-        .reduce(Tally::default, Tally::merge)
+    let next = AtomicUsize::new(0);
+    let threads = std::thread::available_parallelism().map_or(2, |n| n.get());
+    std::thread::scope(|scope| {
+        let workers: Vec<_> = (0..threads)
+            .map(|_| {
+                scope.spawn(|| {
+                    let mut tally = Tally::default();
+                    loop {
+                        let c = next.fetch_add(1, Ordering::Relaxed);
+                        if c >= cases {
+                            return tally;
+                        }
+                        tally =
+                            tally.merge(one_case(case_seed(base_seed, c as u64), QUERIES_PER_CASE));
+                    }
+                })
+            })
+            .collect();
+        workers
+            .into_iter()
+            .map(|w| w.join().expect("a validation worker panicked"))
+            .fold(Tally::default(), Tally::merge)
+    })
 }
-
-/// Query points per random cloud.
-const QUERIES_PER_CASE: usize = 24;
 
 fn case_seed(base: u64, case: u64) -> u64 {
     // SplitMix64 step: distinct, well-mixed seeds per case.
@@ -234,173 +423,4 @@ fn case_seed(base: u64, case: u64) -> u64 {
     z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
     z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
     z ^ (z >> 31)
-}
-
-fn one_case(seed: u64, queries: usize) -> Tally {
-    let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let kind = CaseKind::ALL[rng.random_range(0..CaseKind::ALL.len())];
-    let h_over_spacing = rng.random_range(1.0..4.0);
-    let perturbed = rng.random_bool(0.5);
-    let cutoff = if rng.random_bool(0.5) {
-        Cutoff::DEFAULT
-    } else {
-        Cutoff::None
-    };
-    let patch = cases::patch(kind, h_over_spacing, perturbed, &mut rng);
-    let mut tally = Tally::default();
-    let config = MlsConfig {
-        cutoff,
-        ..MlsConfig::new(patch.h)
-    };
-    let Ok(surface) = MlsSurface::new(&patch.points, &patch.normals, config) else {
-        tally.skipped += queries;
-        return tally;
-    };
-    let mut ev = surface.evaluator();
-    let a = 1.0 / (patch.h * patch.h);
-    let mut jet_queries = Vec::new();
-    for _ in 0..queries {
-        // On the surface near the centre, or off it by up to ±h along the normal.
-        let base = patch.query_base(&mut rng);
-        let offset = if rng.random_bool(0.5) {
-            0.0
-        } else {
-            rng.random_range(-1.0..1.0) * patch.h
-        };
-        let x = base.0 + base.1 * offset;
-        jet_queries.push(x);
-        let Ok(closed) = ev.curvature_at(&x) else {
-            tally.skipped += 1;
-            continue;
-        };
-        let support = ev.support_of(&x);
-        let w = mls_ad::witness(&x.coords, &support, a);
-        compare(&mut tally, seed, patch.h, &closed, &w, &x, &support, a);
-        tally.evals += 1;
-    }
-    compare_jets(&mut tally, seed, &patch, &surface, &jet_queries, &mut rng);
-    tally
-}
-
-/// The jet estimator through the whole-cloud entry point against its witness, which filters
-/// its support from every sample of the patch by brute force.
-fn compare_jets(
-    tally: &mut Tally,
-    seed: u64,
-    patch: &cases::Patch,
-    surface: &MlsSurface,
-    queries: &[Point],
-    rng: &mut ChaCha8Rng,
-) {
-    let config = mls_core::JetConfig {
-        normals: if rng.random_bool(0.5) {
-            mls_core::NormalData::Slopes
-        } else {
-            mls_core::NormalData::Ignore
-        },
-        ..mls_core::JetConfig::default()
-    };
-    let samples: Vec<mls_core::Sample> = patch
-        .points
-        .iter()
-        .zip(&patch.normals)
-        .map(|(p, n)| mls_core::Sample {
-            point: *p,
-            normal: n.normalize(),
-        })
-        .collect();
-    let results = surface.jet_at_points(queries, &config, mls_core::Parallelism::Rayon);
-    for (x, r) in queries.iter().zip(results) {
-        let candidates = mls_ad::jet_candidates(&x.coords, &samples, patch.h, &config);
-        // The witness's choice; a production choice of another accepted scale whose estimated
-        // error ties the least within 1e-4 (the two routes' error estimates agree to ~1e-5)
-        // is a tie broken by rounding, not a wrong formula: compare against that scale.
-        let witness = candidates.as_ref().and_then(|c| {
-            let least = c.iter().map(|(m, _)| *m).fold(f64::INFINITY, f64::min);
-            let chosen = c.iter().find(|(m, _)| *m == least).map(|(_, w)| *w);
-            match &r {
-                Ok(j) => c
-                    .iter()
-                    .find(|(m, w)| w.radius == j.fit.radius && *m <= least * (1.0 + 1e-4))
-                    .map(|(_, w)| *w)
-                    .or(chosen),
-                Err(_) => chosen,
-            }
-        });
-        match (r, witness) {
-            (Ok(j), Some(w)) => {
-                let kappa = w.k1.abs().max(w.k2.abs()).max(1.0 / patch.h);
-                // A least-squares solution carries rounding of about cond(M)·ε whatever the
-                // route; differences are measured against that bound where it exceeds the
-                // threshold (reported at the threshold's scale).
-                let rounding = (1e3 * f64::EPSILON * w.condition / THRESHOLD).max(1.0);
-                tally.record(12, (j.curvature.k1 - w.k1).abs() / kappa / rounding, seed);
-                tally.record(13, (j.curvature.k2 - w.k2).abs() / kappa / rounding, seed);
-                let pe = j.predicted_error();
-                let we = [w.sd[0].hypot(w.bias[0]), w.sd[1].hypot(w.bias[1])];
-                let sd = (pe[0] - we[0]).abs().max((pe[1] - we[1]).abs());
-                let sd_scale = (w.sd[0].hypot(w.bias[0]))
-                    .max(w.sd[1].hypot(w.bias[1]))
-                    // Within 1000× of the rounding floor (1e-8/ρ) a predicted error is made of
-                    // residuals at rounding level and carries their rounding.
-                    .max(1e3 * mls_core::jet::SD_FLOOR / w.radius);
-                let sd_rounding = (1e3 * f64::EPSILON * w.condition / SD_THRESHOLD).max(1.0);
-                tally.record(14, sd / sd_scale / sd_rounding, seed);
-                let same = j.fit.degree == w.degree && j.fit.radius == w.radius;
-                tally.record(15, if same { 0.0 } else { 1.0 }, seed);
-                tally.evals += 1;
-            }
-            // Both find the point degenerate: nothing to compare.
-            (Err(_), None) => tally.skipped += 1,
-            // One side failed where the other did not: as wrong as a different number.
-            _ => tally.record(15, 1.0, seed),
-        }
-    }
-}
-
-#[allow(clippy::too_many_arguments)]
-fn compare(
-    tally: &mut Tally,
-    seed: u64,
-    h: f64,
-    closed: &mls_core::SurfacePoint,
-    w: &mls_ad::Witness,
-    x: &Point,
-    support: &[mls_core::Sample],
-    a: f64,
-) {
-    let imp = &closed.implicit;
-    let f = &imp.field;
-    let gnorm = w.gradient.norm();
-    let hnorm = w.hessian.norm();
-    let d2scale: f64 = w
-        .second
-        .iter()
-        .map(|m| m.norm())
-        .sum::<f64>()
-        .max(1.0 / (h * h));
-    let d2diff: f64 = (0..3).map(|c| (f.second[c] - w.second[c]).norm()).sum();
-    tally.record(0, (f.normal - w.normal).norm(), seed);
-    tally.record(
-        1,
-        (f.jacobian - w.jacobian).norm() / w.jacobian.norm().max(1.0 / h),
-        seed,
-    );
-    tally.record(2, d2diff / d2scale, seed);
-    tally.record(3, (imp.value - w.value).abs() / (gnorm * h), seed);
-    tally.record(4, (imp.gradient - w.gradient).norm() / gnorm, seed);
-    tally.record(5, (imp.hessian - w.hessian).norm() / hnorm, seed);
-    let wc = mls_ad::witness_curvature(&w.gradient, &w.hessian);
-    let c = &closed.curvature;
-    let kappa = hnorm / gnorm;
-    tally.record(6, (c.gauss - wc.gauss).abs() / (kappa * kappa), seed);
-    tally.record(7, (c.mean - wc.mean).abs() / kappa, seed);
-    tally.record(8, (c.k1 - wc.k1).abs() / kappa, seed);
-    tally.record(9, (c.k2 - wc.k2).abs() / kappa, seed);
-    let gap = (wc.k1 - wc.k2) / kappa;
-    let sin1 = c.d1.cross(&wc.d1).norm();
-    let sin2 = c.d2.cross(&wc.d2).norm();
-    tally.record(10, sin1.max(sin2) * gap, seed);
-    let eq5 = mls_ad::implicit_from_energy(&x.coords, support, a, w.log_scale);
-    tally.record(11, (eq5 - w.value).abs() / (gnorm * h), seed);
 }

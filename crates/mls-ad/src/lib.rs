@@ -2,16 +2,25 @@
 //! (Eqs. 2, 3, 4, 5 and 7), generic over num-dual's dual numbers, and differentiated
 //! automatically.
 //!
-//! Architecture invariant: this crate uses mls-core's data types ([`Sample`]) and neighbour
-//! search only, never its derivative or curvature code. Generic dual-number code lives here
+//! Architecture invariant: this crate uses mls-core's data types ([`Sample`], `PointStatus`)
+//! only, never its neighbour search, derivative, projection, normal-estimation or curvature
+//! code: every support is a brute-force distance filter ([`support`]). Generic dual-number code lives here
 //! and nowhere else.
 
+mod adaptive;
 mod jet;
+mod line;
+mod normals;
+mod support;
 
+pub use adaptive::{AdaptiveWitness, Ladder, adaptive_witness};
 pub use jet::{JetWitness, jet_candidates, jet_witness};
+pub use line::{LineWitness, line_witness, stationarity};
 use mls_core::Sample;
 use nalgebra::{Matrix3, SVector, SymmetricEigen, Vector3};
+pub use normals::{NormalWitness, jacobi, normal_witness};
 use num_dual::{DualNum, gradient, hessian};
+pub use support::{COHERENCE_FLOOR, GRADIENT_FLOOR, classify, classify_g, support, weight_sum};
 
 /// Everything the closed form computes, recomputed by automatic differentiation.
 #[derive(Clone, Copy, Debug, PartialEq)]

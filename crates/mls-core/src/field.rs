@@ -410,15 +410,31 @@ pub(crate) enum Isa {
 }
 
 impl Isa {
-    /// The best [`Kernels`] for this CPU (the standard library caches the CPUID answer).
+    /// The best [`Kernels`] for this CPU (the standard library caches the CPUID answer),
+    /// unless this thread asked for the portable ones ([`set_portable_kernels`]).
     #[inline(always)]
     pub(crate) fn detect() -> Self {
         #[cfg(target_arch = "x86_64")]
-        if let Some(k) = Avx2::new() {
+        if !FORCE_PORTABLE.get()
+            && let Some(k) = Avx2::new()
+        {
             return Self::Avx2(k);
         }
         Self::Portable(Portable)
     }
+}
+
+thread_local! {
+    /// Whether this thread runs the portable kernels even where AVX2 exists.
+    static FORCE_PORTABLE: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+}
+
+/// Makes the current thread run the portable (baseline) kernels even on a CPU with AVX2, or
+/// (with `false`) the best ones again. Results are the same bits either way; this exists so
+/// that `cargo xtask validate` can run both paths of the production code on one machine. It
+/// affects only the calling thread: for a rayon pool, call it from the pool's start handler.
+pub fn set_portable_kernels(portable: bool) {
+    FORCE_PORTABLE.set(portable);
 }
 
 /// The instruction set the per-sample loops of [`evaluate`] run with on this CPU: `"avx2"`, or
@@ -618,14 +634,14 @@ impl Sym {
 /// library's `exp` per sample cost as much as the first pass). [`exp_any`] covers the whole
 /// range, at one more select per value.
 #[inline(always)]
-pub(crate) fn exp_weight(x: f64) -> f64 {
+pub fn exp_weight(x: f64) -> f64 {
     exp_impl::<false>(x)
 }
 
 /// `exp(x)` for every `x`, as [`exp_weight`]: the projection's line energy also meets positive
 /// arguments, up to `a·shift`.
 #[inline(always)]
-pub(crate) fn exp_any(x: f64) -> f64 {
+pub fn exp_any(x: f64) -> f64 {
     exp_impl::<true>(x)
 }
 

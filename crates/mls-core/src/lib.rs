@@ -40,7 +40,7 @@ pub use normals::{
     EstimatedNormals, NormalsConfig, NormalsError, Orientation, estimate_normals,
     orientation_consistency,
 };
-pub use projection::ProjectionConfig;
+pub use projection::{LineDerivatives, ProjectionConfig};
 pub use status::PointStatus;
 pub use surface::{Evaluator, MlsConfig, MlsSurface, Parallelism, PointResult, SurfacePoint};
 

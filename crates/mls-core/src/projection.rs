@@ -111,6 +111,45 @@ pub(crate) fn line_energy(
     *acc = [e1, e2];
 }
 
+/// e′(t) and e″(t) along the line `x + t n`, by the same code as the projection's line
+/// search, both scaled by the positive constant `exp(a·shift)` (`shift` the smallest squared
+/// distance from `x` to a sample, returned as `a·shift`). For independent verification
+/// (`cargo xtask validate`): the projection itself calls the same [`energy_derivatives`].
+pub fn line_derivatives(
+    x: &Point,
+    n: &Vector,
+    samples: &[Sample],
+    inv_h2: f64,
+    t: f64,
+) -> LineDerivatives {
+    let mut line = Vec::new();
+    LineBlock::fill(&mut line, x, n, samples);
+    let shift = line_shift(&line);
+    let (first, second) = energy_derivatives(&mut line, inv_h2, shift, t);
+    LineDerivatives {
+        first,
+        second,
+        log_scale: inv_h2 * shift,
+    }
+}
+
+/// e′(t), e″(t) along a line, scaled by `exp(log_scale)`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LineDerivatives {
+    /// `e′(t) · exp(log_scale)`.
+    pub first: f64,
+    /// `e″(t) · exp(log_scale)`.
+    pub second: f64,
+    /// `a·δ²`, δ the distance from the line's origin to the nearest sample.
+    pub log_scale: f64,
+}
+
+/// The smallest squared distance from the line's origin to a sample: the weights are shifted
+/// by it so that they cannot all underflow.
+fn line_shift(line: &[LineBlock]) -> f64 {
+    line.iter().flat_map(|s| s.c).fold(f64::INFINITY, f64::min)
+}
+
 /// The most steps one downhill walk may take before its line search gives up.
 const MAX_WALK_STEPS: usize = 1000;
 
@@ -122,7 +161,7 @@ pub(crate) fn line_minimum(
     h: f64,
     cfg: &ProjectionConfig,
 ) -> Option<f64> {
-    let shift = line.iter().flat_map(|s| s.c).fold(f64::INFINITY, f64::min);
+    let shift = line_shift(line);
     let toward: f64 = line.iter().flat_map(|s| s.b).map(|b| -b).sum();
     let mut f = |t: f64| energy_derivatives(line, a, shift, t);
     let tol = cfg.tolerance * h;
