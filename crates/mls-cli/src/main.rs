@@ -13,6 +13,7 @@ mod info;
 mod output;
 mod pipeline;
 mod progress;
+mod render;
 
 #[derive(Debug, clap::Parser)]
 #[command(
@@ -54,6 +55,9 @@ enum Command {
     Project(ProjectArgs),
     /// Point count, bounding box, spacing, suggested h, normals.
     Info(InfoArgs),
+    /// A PNG picture of a result: each point coloured by its mean, k1, k2, Gaussian
+    /// curvature or status, with a colour bar or legend.
+    Render(render::RenderArgs),
 }
 
 /// Where normals come from.
@@ -424,6 +428,7 @@ fn main() -> ExitCode {
         Command::Normals(a) => commands::normals(a),
         Command::Project(a) => commands::project(a),
         Command::Info(a) => info::info(a),
+        Command::Render(a) => render::render(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
