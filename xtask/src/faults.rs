@@ -218,8 +218,15 @@ const FAULTS: &[Fault] = &[
         name: "J4 slope degrees of freedom",
         description: "the slopes' share of the hat matrix's trace counted without the weight λ",
         file: "crates/mls-core/src/jet.rs",
-        original: "weight_s - lambda * inv.dot(&sp2)",
-        replacement: "weight_s - inv.dot(&sp2)",
+        original: "weight_s - lambda * trace_product(&inv, &sp2)",
+        replacement: "weight_s - trace_product(&inv, &sp2)",
+    },
+    Fault {
+        name: "J5 trusted fits",
+        description: "a fit enters the ladder's stopping rules from 2 equations per coefficient, not 3",
+        file: "crates/mls-core/src/jet.rs",
+        original: "pub const TRUSTED_EQUATIONS_PER_COEFFICIENT: f64 = 3.0;",
+        replacement: "pub const TRUSTED_EQUATIONS_PER_COEFFICIENT: f64 = 2.0;",
     },
 ];
 

@@ -9,7 +9,6 @@ mod accuracy;
 mod bench;
 mod defaults;
 mod faults;
-mod figures;
 mod paper;
 mod robustness;
 mod validate;

@@ -15,7 +15,7 @@ use mls_core::{
 };
 use mls_shapes::{BSplineSurface, Cylinder, ParametricSurface, Torus, closest_point_newton};
 
-use crate::figures::{self, Axis, ColourScale, Panel, Series, View};
+use mls_render::{Axis, ColourScale, Panel, Series, Up, View};
 
 /// Seed of every noise draw, so that the document is reproducible bit for bit.
 const NOISE_SEED: u64 = 7;
@@ -290,6 +290,7 @@ fn cases(quick: bool) -> Vec<Case> {
         View {
             azimuth_deg: -60.0,
             elevation_deg: 20.0,
+            up: Up::Z,
         },
     ));
 
@@ -361,6 +362,7 @@ fn torus_case(quick: bool, sigma: f64) -> Case {
         View {
             azimuth_deg: -60.0,
             elevation_deg: 50.0,
+            up: Up::Z,
         },
     );
     case.points = mls_shapes::add_position_noise(&case.points, sigma, NOISE_SEED);
@@ -410,6 +412,7 @@ fn patch_case(
         View {
             azimuth_deg: -60.0,
             elevation_deg: 45.0,
+            up: Up::Z,
         },
     )
 }
@@ -575,39 +578,39 @@ fn shape_figure(case: &Case, maps: &Maps, dir: &Path, file: &str) -> Result<()> 
     let panels = vec![
         Panel {
             title: "k1".into(),
-            scale: ColourScale::robust_sequential(&k1, "k1"),
+            legend: ColourScale::robust_sequential(&k1, "k1").into(),
             values: k1,
         },
         Panel {
             title: "k2".into(),
-            scale: ColourScale::robust_sequential(&k2, "k2"),
+            legend: ColourScale::robust_sequential(&k2, "k2").into(),
             values: k2,
         },
         Panel {
             title: "k1 error, fixed h, input".into(),
             values: maps.fixed.0.clone(),
-            scale: err.clone(),
+            legend: err.clone().into(),
         },
         Panel {
             title: "k2 error, fixed h, input".into(),
             values: maps.fixed.1.clone(),
-            scale: err.clone(),
+            legend: err.clone().into(),
         },
         Panel {
             title: "k1 error, adaptive, projected".into(),
             values: maps.adaptive.0.clone(),
-            scale: err.clone(),
+            legend: err.clone().into(),
         },
         Panel {
             title: "k2 error, adaptive, projected".into(),
             values: maps.adaptive.1.clone(),
-            scale: err,
+            legend: err.into(),
         },
     ];
-    figures::splat_panels_png(
+    mls_render::splat_panels_png(
         &dir.join(file),
         &format!("{}: {}", case.name, case.setup),
-        figures::Cloud {
+        mls_render::Cloud {
             points: &pts,
             normals: Some(&nrm),
         },
@@ -744,10 +747,10 @@ fn chosen_scale_figure(case: &Case, fig_dir: &Path, md: &mut String) -> Result<(
         .collect();
     let pts: Vec<[f64; 3]> = q.iter().map(|p| p.coords.into()).collect();
     let nrm: Vec<[f64; 3]> = case.queries.iter().map(|&i| case.exact[i].into()).collect();
-    figures::splat_png(
+    mls_render::splat_png(
         &fig_dir.join("torus-noise-1e-3-scale.png"),
         "Noisy torus σ = 1e-3: scale chosen at the input points",
-        figures::Cloud {
+        mls_render::Cloud {
             points: &pts,
             normals: Some(&nrm),
         },
@@ -756,7 +759,7 @@ fn chosen_scale_figure(case: &Case, fig_dir: &Path, md: &mut String) -> Result<(
             min: 1.0,
             max: 4.0,
             label: "chosen h / base h".into(),
-            kind: figures::ScaleKind::Sequential,
+            kind: mls_render::ScaleKind::Sequential,
         },
         case.view,
         (560, 460),
@@ -815,7 +818,7 @@ fn density_study(quick: bool, md: &mut String, fig_dir: &Path) -> Result<()> {
         series[2].points.push((x, ap.k1.1));
         series[3].points.push((x, ap.k2.1));
     }
-    figures::line_chart_png(
+    mls_render::line_chart_png(
         &fig_dir.join("figure8-density.png"),
         "NURBS 1: error σ against density (h = 2/n)",
         &Axis::linear("n (points per direction)"),
@@ -932,21 +935,21 @@ fn bunny(md: &mut String, fig_dir: &Path) -> Result<()> {
         Panel {
             title: "k1".into(),
             values: k1,
-            scale: scale.clone(),
+            legend: scale.clone().into(),
         },
         Panel {
             title: "k2".into(),
             values: k2,
-            scale,
+            legend: scale.into(),
         },
     ];
-    figures::splat_panels_png(
+    mls_render::splat_panels_png(
         &fig_dir.join("bunny.png"),
         &format!(
             "Stanford bunny scan, {} points, normals estimated, h = {h:.2e}",
             pts.len()
         ),
-        figures::Cloud {
+        mls_render::Cloud {
             points: &splat,
             normals: Some(&normals),
         },
@@ -954,6 +957,7 @@ fn bunny(md: &mut String, fig_dir: &Path) -> Result<()> {
         View {
             azimuth_deg: -90.0,
             elevation_deg: 10.0,
+            up: Up::Z,
         },
         (420, 420),
         2,

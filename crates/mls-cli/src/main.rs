@@ -10,6 +10,7 @@ use mls_cli::{At, Format, Method, NormalsMode, parse_cutoff, parse_orient, posit
 
 mod commands;
 mod info;
+mod render;
 
 #[derive(Debug, clap::Parser)]
 #[command(
@@ -51,6 +52,9 @@ enum Command {
     Project(ProjectArgs),
     /// Point count, bounding box, spacing, suggested h, normals.
     Info(InfoArgs),
+    /// A PNG picture of a result: each point coloured by its mean, k1, k2, Gaussian
+    /// curvature or status, with a colour bar or legend.
+    Render(render::RenderArgs),
 }
 
 /// How a command runs: threads and chatter.
@@ -322,6 +326,7 @@ fn main() -> ExitCode {
         Command::Normals(a) => commands::normals(a),
         Command::Project(a) => commands::project(a),
         Command::Info(a) => info::info(a),
+        Command::Render(a) => render::render(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

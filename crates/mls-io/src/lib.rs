@@ -237,11 +237,50 @@ pub fn read_point_cloud_as_with(
     let size = opened.metadata().ok().map(|m| m.len());
     let reader = BufReader::with_capacity(1 << 20, opened);
     match format {
-        FileFormat::Ply => ply::read(reader, &file, size),
+        FileFormat::Ply => ply::read(reader, &file, size, &SLOT_NAMES),
         FileFormat::Xyz => read_xyz_with(reader, &file, options),
         FileFormat::Csv => read_csv_with(reader, &file, options),
         FileFormat::Las | FileFormat::Laz => las::read(reader, &file),
     }
+}
+
+/// Reads every column of a file as [`read_point_cloud`] does, except that only `x`, `y`, `z`
+/// are geometry: `nx`, `ny`, `nz` are read as attributes like any other column, NaN allowed,
+/// and [`PointCloud::normals`] is `None` (LAS/LAZ excepted, whose normals, from extra bytes,
+/// are never checked). For the output of a computation, whose failed points have NaN
+/// normals, when no normals are needed as such (a picture of a result). `options` name the
+/// columns of a text file, as for [`read_point_cloud_with`].
+///
+/// # Errors
+/// Those of [`read_point_cloud_with`].
+pub fn read_point_cloud_normals_as_attributes(
+    path: &Path,
+    options: &ReadOptions,
+) -> Result<PointCloud, ReadError> {
+    let file = path.display().to_string();
+    if path.is_dir() {
+        return Err(ReadError::IsADirectory { file });
+    }
+    let format = match detect_format(path) {
+        Ok(format) => format,
+        Err(None) => return Err(ReadError::NoExtension { file }),
+        Err(Some(extension)) => return Err(ReadError::UnknownExtension { file, extension }),
+    };
+    let opened = File::open(path).map_err(|error| ReadError::Io {
+        file: file.clone(),
+        error,
+    })?;
+    let size = opened.metadata().ok().map(|m| m.len());
+    let reader = BufReader::with_capacity(1 << 20, opened);
+    let points = &SLOT_NAMES[..3];
+    let outcome = match format {
+        FileFormat::Ply if options.columns.is_some() => Err(ReadError::ColumnsForPly { file }),
+        FileFormat::Ply => ply::read(reader, &file, size, points),
+        FileFormat::Xyz => text::read_xyz_slots(reader, &file, options, points),
+        FileFormat::Csv => text::read_csv_slots(reader, &file, options, points),
+        FileFormat::Las | FileFormat::Laz => las::read(reader, &file),
+    };
+    outcome.map(|r| r.cloud)
 }
 
 /// Reads a point cloud in the given format from a stream, such as standard input; `name` is
@@ -275,7 +314,7 @@ pub fn read_point_cloud_from_with(
                 file: name.to_owned(),
             })
         }
-        FileFormat::Ply => ply::read(reader, name, None),
+        FileFormat::Ply => ply::read(reader, name, None, &SLOT_NAMES),
         FileFormat::Xyz => read_xyz_with(reader, name, options),
         FileFormat::Csv => read_csv_with(reader, name, options),
         FileFormat::Las | FileFormat::Laz => las::read_stream(reader, name),
@@ -297,7 +336,7 @@ pub fn read_point_cloud_from_with(
 /// and the property); for a binary body [`ReadError::Truncated`] and [`ReadError::Binary`]
 /// (naming the byte offset, element index and property); and [`ReadError::Io`].
 pub fn read_ply(reader: impl BufRead, name: &str) -> Result<PointCloud, ReadError> {
-    ply::read(reader, name, None).map(|r| r.cloud)
+    ply::read(reader, name, None, &SLOT_NAMES).map(|r| r.cloud)
 }
 
 /// Returns whether `a` and `b` name the same file, so a caller can refuse to overwrite its

@@ -149,6 +149,17 @@ pub fn read_xyz_with(
     name: &str,
     options: &ReadOptions,
 ) -> Result<ReadOutcome, ReadError> {
+    read_xyz_slots(reader, name, options, &SLOT_NAMES)
+}
+
+/// [`read_xyz_with`], reading the leading [`SLOT_NAMES`] `slots` as geometry and any other
+/// column as an attribute.
+pub(crate) fn read_xyz_slots(
+    reader: impl BufRead,
+    name: &str,
+    options: &ReadOptions,
+    slots: &[&str],
+) -> Result<ReadOutcome, ReadError> {
     let mut lines = Lines::new(reader, 0);
     let mut roles: Vec<Role> = Vec::new();
     let mut first_row = true;
@@ -186,10 +197,11 @@ pub fn read_xyz_with(
                             named: columns.to_string(),
                         });
                     }
-                    cloud = CloudBuilder::new(columns.has_normals(), 0);
+                    cloud = CloudBuilder::new(columns.has_normals() && slots.len() > 3, 0);
                     columns
                         .slots()
                         .into_iter()
+                        .map(|slot| slot.filter(|&s| s < slots.len()))
                         .zip(columns.names())
                         .enumerate()
                         .map(|(c, (slot, name))| match slot {
@@ -200,7 +212,8 @@ pub fn read_xyz_with(
                         .collect()
                 }
                 None => {
-                    if found >= 6 {
+                    let normals = found >= 6 && slots.len() > 3;
+                    if normals {
                         check = Some(UnitCheck::default());
                     }
                     (0..found)
@@ -208,7 +221,7 @@ pub fn read_xyz_with(
                             let name = format!("col{}", c + 1);
                             match c {
                                 0..3 => Role::Slot(c),
-                                3..6 if found >= 6 => {
+                                3..6 if normals => {
                                     Role::Candidate(c - 3, attributes.add(name, c + 1))
                                 }
                                 _ => Role::Attribute(attributes.add(name, c + 1)),
@@ -365,6 +378,17 @@ pub fn read_csv_with(
     name: &str,
     options: &ReadOptions,
 ) -> Result<ReadOutcome, ReadError> {
+    read_csv_slots(reader, name, options, &SLOT_NAMES)
+}
+
+/// [`read_csv_with`], reading the leading [`SLOT_NAMES`] `slots` as geometry and any other
+/// column as an attribute.
+pub(crate) fn read_csv_slots(
+    reader: impl BufRead,
+    name: &str,
+    options: &ReadOptions,
+    slots: &[&str],
+) -> Result<ReadOutcome, ReadError> {
     let mut lines = Lines::new(reader, 0);
     let Some((header_line, header)) = lines.next_line(name)? else {
         return Err(ReadError::Header {
@@ -403,7 +427,7 @@ pub fn read_csv_with(
     let mut present = [false; 6];
     for (column, column_name) in names.iter().enumerate() {
         let lowercase = column_name.to_ascii_lowercase();
-        let Some(slot) = SLOT_NAMES.iter().position(|n| *n == lowercase) else {
+        let Some(slot) = slots.iter().position(|n| *n == lowercase) else {
             if column_name == "_" && options.columns.is_some() {
                 continue;
             }

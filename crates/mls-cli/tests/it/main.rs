@@ -18,5 +18,6 @@ mod las;
 mod normals;
 mod overwrite;
 mod project;
+mod render;
 mod sphere;
 mod streams;

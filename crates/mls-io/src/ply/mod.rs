@@ -31,14 +31,16 @@ enum Target {
     Skip,
 }
 
-/// Reads a PLY stream; `size_hint` is the total file size when known, to bound preallocation.
+/// Reads a PLY stream; `size_hint` is the total file size when known, to bound preallocation;
+/// `slots` are the leading [`SLOT_NAMES`] read as geometry (the rest become attributes).
 pub(crate) fn read(
     mut reader: impl BufRead,
     file: &str,
     size_hint: Option<u64>,
+    slots: &[&str],
 ) -> Result<ReadOutcome, ReadError> {
     let header = parse_header(&mut reader, file)?;
-    let (vertex_index, targets, notes) = vertex_layout(&header, file)?;
+    let (vertex_index, targets, notes) = vertex_layout(&header, file, slots)?;
     let has_normals = targets.contains(&Target::Slot(3));
     let remaining = size_hint.map(|size| size.saturating_sub(header.bytes));
     let mut elements = header.elements.iter();
@@ -81,6 +83,7 @@ pub(crate) fn read(
 fn vertex_layout(
     header: &Header,
     file: &str,
+    slots: &[&str],
 ) -> Result<(usize, Vec<Target>, Vec<String>), ReadError> {
     let Some((index, vertex)) = header
         .elements
@@ -95,7 +98,7 @@ fn vertex_layout(
     let mut attributes = 0;
     let mut present = [false; 6];
     for property in &vertex.properties {
-        let slot = SLOT_NAMES.iter().position(|&n| n == property.name);
+        let slot = slots.iter().position(|&n| n == property.name);
         if let (Some(slot), PropertyKind::List { .. }) = (slot, property.kind) {
             return Err(ReadError::Header {
                 file: file.to_owned(),

@@ -367,3 +367,56 @@ fn invalid_tables_are_rejected_before_writing() {
     );
     assert_message(&err, "out.obj", &["\".obj\""]);
 }
+
+/// A result table with a failed point (NaN normal, as `curvature` writes it) reads back in
+/// every text and PLY format with the normals as attributes, NaN kept, while the usual reader
+/// refuses the NaN normal.
+#[test]
+fn normals_as_attributes_reads_nan_normals_of_failed_points() {
+    let dir = tempfile::tempdir().unwrap();
+    let points = vec![[0.0, 1.0, 2.0], [3.0, 4.0, 5.0]];
+    let normals = vec![[0.0, 0.0, 1.0], [f64::NAN; 3]];
+    let mean = vec![0.5, f64::NAN];
+    let status = vec![0, 5];
+    let columns = vec![
+        Column::component("x", &points, mls_io::Axis::X),
+        Column::component("y", &points, mls_io::Axis::Y),
+        Column::component("z", &points, mls_io::Axis::Z),
+        Column::component("nx", &normals, mls_io::Axis::X),
+        Column::component("ny", &normals, mls_io::Axis::Y),
+        Column::component("nz", &normals, mls_io::Axis::Z),
+        Column::f64("mean", &mean),
+        Column::i32("status", &status),
+    ];
+    // An XYZ file has its names in a comment only: they are given.
+    let named = ReadOptions {
+        columns: Some(ColumnNames::parse("x,y,z,nx,ny,nz,mean,status").unwrap()),
+    };
+    for (file, options) in [
+        ("r.ply", ReadOptions::default()),
+        ("r.csv", ReadOptions::default()),
+        ("r.xyz", named),
+    ] {
+        let path = dir.path().join(file);
+        write_point_cloud(&path, &columns, PlyFormat::BinaryLittleEndian).unwrap();
+        // A headerless XYZ file already takes `NaN NaN NaN` for a missing normal.
+        if file != "r.xyz" {
+            assert!(read_point_cloud(&path).is_err(), "{file}: NaN refused");
+        }
+        let cloud = mls_io::read_point_cloud_normals_as_attributes(&path, &options).unwrap();
+        assert_eq!(cloud.points, points, "{file}");
+        assert_eq!(cloud.normals, None, "{file}");
+        let names: Vec<&str> = cloud.attributes.iter().map(|a| a.name.as_str()).collect();
+        assert_eq!(names, ["nx", "ny", "nz", "mean", "status"], "{file}");
+        let value = |name: &str, i: usize| {
+            let a = cloud.attributes.iter().find(|a| a.name == name).unwrap();
+            a.data.f64_at(i).unwrap()
+        };
+        assert_eq!((value("nz", 0), value("mean", 0)), (1.0, 0.5), "{file}");
+        assert!(
+            value("nx", 1).is_nan() && value("mean", 1).is_nan(),
+            "{file}"
+        );
+        assert_eq!(value("status", 1), 5.0, "{file}");
+    }
+}

@@ -1,11 +1,32 @@
-//! PNG figures for `cargo xtask paper`: values on a point cloud as shaded splats with a colour
-//! bar, and line charts.
+//! Pictures of values on point clouds: each point a shaded splat coloured by its value, with a
+//! colour bar (a diverging or sequential map with robust limits) or a legend of categories,
+//! several panels to a figure; and line charts. Used by `cargo xtask paper` for the paper's
+//! figures and by `mlscurv render`.
 //!
 //! The splat renderer is our own (an orthographic z-buffer of screen-space discs) and writes
 //! straight into an RGB buffer; plotters then draws the text, tick marks and line charts into
 //! the same buffer, and the `png` crate encodes it, atomically. Text uses Ubuntu Light,
 //! compiled in from `epaint_default_fonts` and drawn with `ab_glyph`, so that building and
 //! running this needs no system font library.
+//!
+//! ```
+//! use mls_render::{Cloud, ColourScale, Panel, View, render};
+//!
+//! let points = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [1.0, 1.0, 0.0]];
+//! let values = vec![-1.0, 0.5, 1.0, f64::NAN];
+//! let panel = Panel {
+//!     title: String::new(),
+//!     legend: ColourScale::robust_symmetric(&values, "mean curvature").into(),
+//!     values,
+//! };
+//! let cloud = Cloud { points: &points, normals: None };
+//! let image = render("Four points", cloud, &[panel], View::THREE_QUARTER, (300, 260), 1)?;
+//! assert_eq!((image.width(), image.height()), (300, 300));
+//! # Ok::<(), anyhow::Error>(())
+//! ```
+//!
+//! Errors are `anyhow` errors with a message naming the file or panel: every caller (the xtask
+//! and the CLI) only shows them.
 //!
 //! Set `FIGURES_TEST_DIR` when running the tests to keep their figures and look at them.
 
@@ -24,6 +45,7 @@ use plotters::element::{Drawable, PointCollection};
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 use plotters_backend::{BackendColor, BackendCoord, BackendTextStyle, DrawingErrorKind};
+use rayon::prelude::*;
 
 /// The family name under which the compiled-in font is registered with plotters.
 const FONT: &str = "sans-serif";
@@ -32,32 +54,124 @@ const PANEL_TITLE_SIZE: f64 = 18.0;
 const LABEL_SIZE: f64 = 15.0;
 const TICK_SIZE: f64 = 13.0;
 
-type Rgb = [u8; 3];
+/// A colour, red, green and blue.
+pub type Rgb = [u8; 3];
 const BACKGROUND: Rgb = [255, 255, 255];
 const INK: RGBColor = RGBColor(30, 30, 30);
 /// Colour of points without a value (NaN), drawn hatched so that it cannot pass for a value.
-const NO_VALUE: Rgb = [170, 170, 170];
+pub const NO_VALUE: Rgb = [170, 170, 170];
 
-/// A fixed orthographic camera, z up.
+/// A fixed orthographic camera: the direction it looks from, as angles around the `up` axis.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub(crate) struct View {
-    /// Angle of the camera around the z axis, from +x towards +y.
+pub struct View {
+    /// Angle of the camera around the up axis, from the axis after it towards the one after
+    /// that (for z up: from +x towards +y; for y up: from +z towards +x; for x up: from +y
+    /// towards +z).
     pub azimuth_deg: f64,
-    /// Angle of the camera above the xy plane.
+    /// Angle of the camera above the plane across the up axis.
     pub elevation_deg: f64,
+    /// The world axis drawn pointing up the picture (as nearly as the view allows).
+    pub up: Up,
+}
+
+/// A coordinate axis that a [`View`] keeps upright.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Up {
+    /// +x up.
+    X,
+    /// +y up, as in many scans (the Stanford bunny).
+    Y,
+    /// +z up, as in LiDAR and the paper's figures.
+    #[default]
+    Z,
+}
+
+impl Up {
+    /// A world vector in the frame whose third axis is the up axis: a cyclic permutation of
+    /// the coordinates, so that the frame stays right-handed.
+    fn to_local(self, [x, y, z]: [f64; 3]) -> [f64; 3] {
+        match self {
+            Self::X => [y, z, x],
+            Self::Y => [z, x, y],
+            Self::Z => [x, y, z],
+        }
+    }
+
+    /// The inverse of [`Self::to_local`].
+    fn to_world(self, [a, b, c]: [f64; 3]) -> [f64; 3] {
+        match self {
+            Self::X => [c, a, b],
+            Self::Y => [b, c, a],
+            Self::Z => [a, b, c],
+        }
+    }
 }
 
 impl View {
     /// A three-quarter view from above that shows a sphere or a torus well.
-    pub(crate) const THREE_QUARTER: View = View {
+    pub const THREE_QUARTER: View = View {
         azimuth_deg: -60.0,
         elevation_deg: 30.0,
+        up: Up::Z,
     };
+
+    /// A view from a written description, keeping `up` upright:
+    ///
+    /// - `+x`, `-x`, `+y`, `-y`, `+z`, `-z`: from far out along that axis, looking back at the
+    ///   cloud (`+z` with z up is from above). Looking along the up axis itself, the next axis
+    ///   points right (x for z up).
+    /// - `AZIMUTH,ELEVATION` in degrees, as in [`View`]; `-60,30` is [`View::THREE_QUARTER`].
+    ///
+    /// # Errors
+    /// A message saying what is expected.
+    pub fn parse(spec: &str, up: Up) -> Result<Self, String> {
+        let spec = spec.trim();
+        let axis = match spec {
+            "+x" | "x" => Some([1.0, 0.0, 0.0]),
+            "-x" => Some([-1.0, 0.0, 0.0]),
+            "+y" | "y" => Some([0.0, 1.0, 0.0]),
+            "-y" => Some([0.0, -1.0, 0.0]),
+            "+z" | "z" => Some([0.0, 0.0, 1.0]),
+            "-z" => Some([0.0, 0.0, -1.0]),
+            _ => None,
+        };
+        if let Some(direction) = axis {
+            let [a, b, c] = up.to_local(direction);
+            let (azimuth_deg, elevation_deg) = if c == 0.0 {
+                (b.atan2(a).to_degrees(), 0.0)
+            } else {
+                // Along the up axis: the azimuth that puts the next axis to the right.
+                (-90.0, 90.0 * c)
+            };
+            return Ok(Self {
+                azimuth_deg,
+                elevation_deg,
+                up,
+            });
+        }
+        let expected = "expected +x, -x, +y, -y, +z, -z, or AZIMUTH,ELEVATION in degrees \
+             (e.g. -60,30)";
+        let numbers: Vec<Option<f64>> = spec
+            .split(',')
+            .map(|s| s.trim().parse::<f64>().ok().filter(|v| v.is_finite()))
+            .collect();
+        match numbers[..] {
+            [Some(azimuth_deg), Some(elevation_deg)] if elevation_deg.abs() <= 90.0 => Ok(Self {
+                azimuth_deg,
+                elevation_deg,
+                up,
+            }),
+            [Some(_), Some(e)] => Err(format!(
+                "view `{spec}`: the elevation must be within -90..90 degrees, got {e}"
+            )),
+            _ => Err(format!("view `{spec}`: {expected}")),
+        }
+    }
 }
 
 /// How values map to colours.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(crate) enum ScaleKind {
+pub enum ScaleKind {
     /// Blue, white, red; white at 0 when `min < 0 < max`, else at the middle of the range.
     /// For signed quantities: errors, curvature of either sign.
     Diverging,
@@ -68,7 +182,7 @@ pub(crate) enum ScaleKind {
 /// The value range of a colour map and its legend label. Values outside the range take the
 /// colour of the nearer end.
 #[derive(Clone, Debug, PartialEq)]
-pub(crate) struct ColourScale {
+pub struct ColourScale {
     pub min: f64,
     pub max: f64,
     /// Shown under the colour bar, e.g. "k1 error".
@@ -79,7 +193,7 @@ pub(crate) struct ColourScale {
 impl ColourScale {
     /// A sequential scale over the 2nd..98th percentile of the finite values, so that a few
     /// outliers do not wash out the map. Falls back to [0, 1] without finite values.
-    pub(crate) fn robust_sequential(values: &[f64], label: &str) -> Self {
+    pub fn robust_sequential(values: &[f64], label: &str) -> Self {
         let (min, max) = match (percentile(values, 0.02), percentile(values, 0.98)) {
             (Some(lo), Some(hi)) if hi > lo => (lo, hi),
             // Constant data: a unit-wide range around it, so the map shows its middle colour.
@@ -97,7 +211,7 @@ impl ColourScale {
     /// A diverging scale symmetric around 0, out to the 98th percentile of `|value|`: for
     /// errors and signed curvature. Falls back to [-1, 1] when every finite value is 0 or
     /// there is none.
-    pub(crate) fn robust_symmetric(values: &[f64], label: &str) -> Self {
+    pub fn robust_symmetric(values: &[f64], label: &str) -> Self {
         let magnitudes: Vec<f64> = values.iter().map(|v| v.abs()).collect();
         let bound = percentile(&magnitudes, 0.98)
             .filter(|&b| b > 0.0)
@@ -199,44 +313,72 @@ fn percentile(values: &[f64], p: f64) -> Option<f64> {
 
 /// One named series of a line chart.
 #[derive(Clone, Debug, PartialEq)]
-pub(crate) struct Series {
+pub struct Series {
     pub name: String,
     pub points: Vec<(f64, f64)>,
 }
 
 /// A cloud to draw: positions, and normals (of either sign) for shading.
 #[derive(Clone, Copy, Debug)]
-pub(crate) struct Cloud<'a> {
+pub struct Cloud<'a> {
     pub points: &'a [[f64; 3]],
     /// One per point; None draws flat colours.
     pub normals: Option<&'a [[f64; 3]]>,
 }
 
-/// One render of a figure with several: its title, one value per point, and their scale.
+/// One render of a figure with several: its title, one value per point, and how values
+/// become colours.
 #[derive(Clone, Debug, PartialEq)]
-pub(crate) struct Panel {
+pub struct Panel {
+    /// Shown above the render; none when empty.
     pub title: String,
+    /// One per point of the cloud; NaN is "no value", drawn hatched grey.
     pub values: Vec<f64>,
-    pub scale: ColourScale,
+    pub legend: Legend,
+}
+
+/// How the values of a panel become colours, and what is drawn under the render to say so.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Legend {
+    /// A colour map, with a colour bar.
+    Bar(ColourScale),
+    /// A few distinct values, each with its own colour and a labelled swatch (for codes such
+    /// as a status).
+    Categories(Vec<Category>),
+}
+
+impl From<ColourScale> for Legend {
+    fn from(scale: ColourScale) -> Self {
+        Self::Bar(scale)
+    }
+}
+
+/// One value of a categorical panel: points with exactly this value take this colour.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Category {
+    pub value: f64,
+    /// Shown beside the swatch.
+    pub label: String,
+    pub colour: Rgb,
 }
 
 /// An axis of a line chart.
 #[derive(Clone, Debug, PartialEq)]
-pub(crate) struct Axis {
+pub struct Axis {
     pub label: String,
     /// Logarithmic; points at or below 0 are then left out.
     pub log: bool,
 }
 
 impl Axis {
-    pub(crate) fn linear(label: &str) -> Self {
+    pub fn linear(label: &str) -> Self {
         Self {
             label: label.to_owned(),
             log: false,
         }
     }
 
-    pub(crate) fn log(label: &str) -> Self {
+    pub fn log(label: &str) -> Self {
         Self {
             label: label.to_owned(),
             log: true,
@@ -250,7 +392,7 @@ impl Axis {
 /// Orthographic projection along `view`, z-buffered discs sized from each point's distance to
 /// its neighbours so that a sampled surface looks closed, and Lambert shading from the normals
 /// when given, so that the shape reads at a glance.
-pub(crate) fn splat_png(
+pub fn splat_png(
     path: &Path,
     title: &str,
     cloud: Cloud<'_>,
@@ -262,22 +404,23 @@ pub(crate) fn splat_png(
     let panel = PanelRef {
         title: "",
         values,
-        scale,
+        legend: LegendRef::Bar(scale),
     };
-    let splats = Splats::new(cloud).with_context(|| format!("cannot draw {}", path.display()))?;
+    let name = path.display().to_string();
+    let splats = Splats::new(cloud).with_context(|| format!("cannot draw {name}"))?;
     let band = if title.is_empty() { 0 } else { TITLE_BAND };
     let grid = Grid {
         columns: 1,
         panel: (size.0, size.1.saturating_sub(band)),
     };
-    render_panels(path, title, &splats, &[panel], view, grid)
+    render_panels(&name, title, &splats, &[panel], view, grid)?.write_png(path)
 }
 
 /// Several renders of one cloud side by side in one PNG, sharing the view: for instance k1, k2
 /// and their errors. Each panel gets its own title and colour bar; `panel_size` is the size of
 /// one panel; panels fill rows of `columns` (so that a figure shown at page width keeps them
 /// large enough to read), and the figure's title band is added above.
-pub(crate) fn splat_panels_png(
+pub fn splat_panels_png(
     path: &Path,
     title: &str,
     cloud: Cloud<'_>,
@@ -286,25 +429,64 @@ pub(crate) fn splat_panels_png(
     panel_size: (u32, u32),
     columns: usize,
 ) -> Result<()> {
-    ensure!(
-        !panels.is_empty(),
-        "no panels to draw in {}",
-        path.display()
-    );
-    let splats = Splats::new(cloud).with_context(|| format!("cannot draw {}", path.display()))?;
+    let name = path.display().to_string();
+    render_named(&name, title, cloud, panels, view, panel_size, columns)?.write_png(path)
+}
+
+/// The figure of [`splat_panels_png`] as an image in memory, for a caller that checks it or
+/// writes it itself ([`Image::write_png`]). A figure of one panel of `(w, h)` with a title is
+/// `(w, h + 40)` pixels.
+///
+/// # Errors
+/// No panels, no point with finite coordinates, values not one per point, a colour scale
+/// without a finite range, or panels too small for their legends.
+pub fn render(
+    title: &str,
+    cloud: Cloud<'_>,
+    panels: &[Panel],
+    view: View,
+    panel_size: (u32, u32),
+    columns: usize,
+) -> Result<Image> {
+    render_named(
+        "the figure",
+        title,
+        cloud,
+        panels,
+        view,
+        panel_size,
+        columns,
+    )
+}
+
+/// [`render`], with `name` in the error messages.
+fn render_named(
+    name: &str,
+    title: &str,
+    cloud: Cloud<'_>,
+    panels: &[Panel],
+    view: View,
+    panel_size: (u32, u32),
+    columns: usize,
+) -> Result<Image> {
+    ensure!(!panels.is_empty(), "no panels to draw in {name}");
+    let splats = Splats::new(cloud).with_context(|| format!("cannot draw {name}"))?;
     let panels: Vec<PanelRef<'_>> = panels
         .iter()
         .map(|p| PanelRef {
             title: &p.title,
             values: &p.values,
-            scale: &p.scale,
+            legend: match &p.legend {
+                Legend::Bar(scale) => LegendRef::Bar(scale),
+                Legend::Categories(categories) => LegendRef::Categories(categories),
+            },
         })
         .collect();
     let grid = Grid {
         columns: panels.len().min(columns.max(1)) as u32,
         panel: panel_size,
     };
-    render_panels(path, title, &splats, &panels, view, grid)
+    render_panels(name, title, &splats, &panels, view, grid)
 }
 
 /// Panels laid out in rows of `columns`, each `panel` pixels, under the figure's title band.
@@ -317,7 +499,7 @@ struct Grid {
 /// A line chart of several series with markers, axis labels and a legend: for instance error
 /// against sampling density. Points that cannot be drawn (NaN, or not positive on a log axis)
 /// are left out.
-pub(crate) fn line_chart_png(
+pub fn line_chart_png(
     path: &Path,
     title: &str,
     x_axis: &Axis,
@@ -349,7 +531,7 @@ pub(crate) fn line_chart_png(
     let x = axis_range(all().map(|p| p.0), log_x);
     let y = axis_range(all().map(|p| p.1), log_y);
 
-    let mut canvas = Canvas::new(size)?;
+    let mut canvas = Image::new(size)?;
     {
         let root = canvas.drawing_area()?;
         let labels = (title, x_label, y_label);
@@ -571,8 +753,10 @@ impl<'a> Splats<'a> {
             .map_err(|_| anyhow!("too many points ({}) for the k-d tree", coords.len()))?;
         // The point itself comes first, at distance 0.
         let wanted = NonZeroUsize::new(SPLAT_NEIGHBOURS + 1).context("neighbour count")?;
+        // The queries dominate the time for a large cloud (a million points), and each is
+        // independent: in parallel.
         let kth: Vec<f64> = coords
-            .iter()
+            .par_iter()
             .map(|p| {
                 let hits = tree
                     .query(p)
@@ -597,7 +781,27 @@ impl<'a> Splats<'a> {
 struct PanelRef<'a> {
     title: &'a str,
     values: &'a [f64],
-    scale: &'a ColourScale,
+    legend: LegendRef<'a>,
+}
+
+/// A [`Legend`] borrowed.
+#[derive(Clone, Copy)]
+enum LegendRef<'a> {
+    Bar(&'a ColourScale),
+    Categories(&'a [Category]),
+}
+
+impl LegendRef<'_> {
+    /// The colour of `value`; None for NaN, and for a value of no category.
+    fn colour(self, value: f64) -> Option<Rgb> {
+        match self {
+            Self::Bar(scale) => scale.colour(value),
+            Self::Categories(categories) => categories
+                .iter()
+                .find(|c| c.value == value)
+                .map(|c| c.colour),
+        }
+    }
 }
 
 /// Height of the figure title band; none when the title is empty.
@@ -606,29 +810,34 @@ const TITLE_BAND: u32 = 40;
 const PANEL_TITLE_BAND: u32 = 30;
 /// Height of the colour-bar band under each render.
 const LEGEND_BAND: u32 = 78;
+/// Width of one entry (swatch and label) of a legend of categories.
+const CATEGORY_WIDTH: i64 = 200;
+/// Height of one row of a legend of categories; three fit in the legend band.
+const CATEGORY_ROW: i64 = 22;
 /// Disc radius as a multiple of the distance to the [`SPLAT_NEIGHBOURS`]-th neighbour: enough
 /// to close the diagonal gaps of a square grid (0.71) and most gaps of random sampling.
 const SPLAT_RADIUS: f64 = 1.0;
 
 fn render_panels(
-    path: &Path,
+    name: &str,
     title: &str,
     cloud: &Splats<'_>,
     panels: &[PanelRef<'_>],
     view: View,
     grid: Grid,
-) -> Result<()> {
-    let context = || format!("cannot draw {}", path.display());
+) -> Result<Image> {
+    let context = || format!("cannot draw {name}");
     for panel in panels {
         ensure!(
             panel.values.len() == cloud.cloud.points.len(),
-            "panel `{}`: {} values for {} points ({})",
+            "panel `{}`: {} values for {} points ({name})",
             panel.title,
             panel.values.len(),
             cloud.cloud.points.len(),
-            path.display()
         );
-        panel.scale.check().with_context(context)?;
+        if let LegendRef::Bar(scale) = panel.legend {
+            scale.check().with_context(context)?;
+        }
     }
     let title_band = if title.is_empty() { 0 } else { TITLE_BAND };
     let columns = grid.columns.max(1);
@@ -643,25 +852,49 @@ fn render_panels(
             .and_then(|h| h.checked_add(title_band))
             .context("figure too tall")?,
     );
-    let mut canvas = Canvas::new(size)?;
+    let mut canvas = Image::new(size)?;
     let mut layouts = Vec::with_capacity(panels.len());
     for (i, panel) in panels.iter().enumerate() {
         let (row, column) = (i as u32 / columns, i as u32 % columns);
         let x0 = column * panel_width;
         let top = title_band + row * panel_height;
-        let layout = PanelLayout::new(x0, top, panel_width, top + panel_height, panel.title)
-            .with_context(|| format!("{} is too small for its panels", path.display()))?;
         let colours: Vec<Option<Rgb>> = panel
             .values
             .iter()
-            .map(|&v| panel.scale.colour(v))
+            .map(|&v| panel.legend.colour(v))
             .collect();
+        let has_none = colours.iter().any(Option::is_none);
+        let entries = match panel.legend {
+            LegendRef::Bar(_) => 0,
+            LegendRef::Categories(c) => c.len() + usize::from(has_none),
+        };
+        let layout = PanelLayout::new(
+            x0,
+            top,
+            panel_width,
+            top + panel_height,
+            panel.title,
+            entries,
+        )
+        .with_context(|| format!("{name} is too small for its panels"))?;
         canvas.splat(layout.render, cloud, &colours, view);
-        canvas.colour_bar(layout.bar, panel.scale);
-        if panel.values.iter().any(|v| v.is_nan()) {
-            canvas.no_value_swatch(layout.bar);
+        match panel.legend {
+            LegendRef::Bar(scale) => {
+                canvas.colour_bar(layout.bar, scale);
+                if has_none {
+                    canvas.no_value_swatch(layout.bar);
+                }
+            }
+            LegendRef::Categories(categories) => {
+                for (k, category) in categories.iter().enumerate() {
+                    canvas.fill(layout.category_swatch(k), category.colour, false);
+                }
+                if has_none {
+                    canvas.fill(layout.category_swatch(categories.len()), NO_VALUE, true);
+                }
+            }
         }
-        layouts.push(layout);
+        layouts.push((layout, has_none));
     }
     {
         let root = canvas.drawing_area()?;
@@ -671,13 +904,12 @@ fn render_panels(
                 .map_err(plotting_error)
                 .with_context(context)?;
         }
-        for (panel, layout) in panels.iter().zip(&layouts) {
-            let has_nan = panel.values.iter().any(|v| v.is_nan());
-            draw_panel_text(&root, panel, layout, has_nan).with_context(context)?;
+        for (panel, (layout, has_none)) in panels.iter().zip(&layouts) {
+            draw_panel_text(&root, panel, layout, *has_none).with_context(context)?;
         }
         root.present().map_err(plotting_error)?;
     }
-    canvas.write_png(path)
+    Ok(canvas)
 }
 
 /// A rectangle in pixels: left, top, width, height.
@@ -695,10 +927,21 @@ struct PanelLayout {
     title_at: Option<(i32, i32)>,
     render: Rect,
     bar: Rect,
+    /// Top left of the first entry of a legend of categories, and entries per row.
+    categories: ((i64, i64), i64),
 }
 
 impl PanelLayout {
-    fn new(x0: u32, top: u32, width: u32, bottom: u32, title: &str) -> Result<Self> {
+    /// The layout of a panel whose legend is a colour bar (`categories` 0) or that many
+    /// categories.
+    fn new(
+        x0: u32,
+        top: u32,
+        width: u32,
+        bottom: u32,
+        title: &str,
+        categories: usize,
+    ) -> Result<Self> {
         let title_band = if title.is_empty() {
             0
         } else {
@@ -714,6 +957,15 @@ impl PanelLayout {
         // and its label after it.
         const SWATCH: i64 = 80;
         let bar_width = (width * 7 / 10).min(width - SWATCH - 50);
+        let per_row = ((width - 20) / CATEGORY_WIDTH).max(1);
+        let entries = categories as i64;
+        let rows = (entries + per_row - 1) / per_row;
+        ensure!(
+            (rows * CATEGORY_ROW + 8) <= i64::from(LEGEND_BAND),
+            "{categories} categories need {rows} rows of {per_row} in the legend, which holds 3; \
+             make the panel wider"
+        );
+        let used = per_row.min(entries.max(1));
         Ok(Self {
             title_at: (title_band > 0)
                 .then(|| ((x0 + width / 2) as i32, (top + title_band / 2) as i32)),
@@ -729,7 +981,26 @@ impl PanelLayout {
                 w: bar_width,
                 h: 14,
             },
+            categories: (
+                (
+                    x0 + (width - used * CATEGORY_WIDTH) / 2 + 10,
+                    i64::from(legend_top) + 8,
+                ),
+                per_row,
+            ),
         })
+    }
+
+    /// The swatch of entry `k` of a legend of categories.
+    fn category_swatch(&self, k: usize) -> Rect {
+        let ((x0, y0), per_row) = self.categories;
+        let k = k as i64;
+        Rect {
+            x: x0 + (k % per_row) * CATEGORY_WIDTH,
+            y: y0 + (k / per_row) * CATEGORY_ROW,
+            w: 14,
+            h: 14,
+        }
     }
 }
 
@@ -737,7 +1008,8 @@ fn text_style(size: f64, h: HPos, v: VPos) -> TextStyle<'static> {
     (FONT, size).into_font().color(&INK).pos(Pos::new(h, v))
 }
 
-/// Panel title, colour-bar frame, ticks, label and the "no value" swatch.
+/// Panel title, then the legend's text: the colour bar's frame, ticks, label and "no value"
+/// swatch, or the categories' frames and labels.
 fn draw_panel_text(
     root: &DrawingArea<Backend<'_>, Shift>,
     panel: &PanelRef<'_>,
@@ -749,6 +1021,24 @@ fn draw_panel_text(
         root.draw_text(panel.title, &style, at)
             .map_err(plotting_error)?;
     }
+    let scale = match panel.legend {
+        LegendRef::Bar(scale) => scale,
+        LegendRef::Categories(categories) => {
+            let labels = categories.iter().map(|c| c.label.as_str());
+            let labels = labels.chain(has_nan.then_some("no value"));
+            let style = text_style(TICK_SIZE, HPos::Left, VPos::Center);
+            for (k, label) in labels.enumerate() {
+                let swatch = layout.category_swatch(k);
+                let (left, top) = (swatch.x as i32, swatch.y as i32);
+                let (right, bottom) = ((swatch.x + swatch.w) as i32, (swatch.y + swatch.h) as i32);
+                root.draw(&Rectangle::new([(left - 1, top - 1), (right, bottom)], INK))
+                    .map_err(plotting_error)?;
+                root.draw_text(label, &style, (right + 5, (top + bottom) / 2))
+                    .map_err(plotting_error)?;
+            }
+            return Ok(());
+        }
+    };
     let bar = layout.bar;
     let (left, top, right, bottom) = (
         bar.x as i32,
@@ -759,7 +1049,6 @@ fn draw_panel_text(
     root.draw(&Rectangle::new([(left - 1, top - 1), (right, bottom)], INK))
         .map_err(plotting_error)?;
 
-    let scale = panel.scale;
     let ticks = Ticks::new(scale.min, scale.max);
     let tick_style = text_style(TICK_SIZE, HPos::Center, VPos::Top);
     for &value in &ticks.values {
@@ -835,14 +1124,35 @@ impl Ticks {
     }
 }
 
-/// An RGB image in memory: the splats are drawn into it directly, text through plotters.
-struct Canvas {
+/// An RGB image in memory, 8 bits a channel, rows from the top: the splats are drawn into it
+/// directly, text through plotters.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Image {
     width: u32,
     height: u32,
+    /// `3 × width × height` bytes.
     rgb: Vec<u8>,
 }
 
-impl Canvas {
+impl Image {
+    /// Width in pixels.
+    pub fn width(&self) -> u32 {
+        self.width
+    }
+
+    /// Height in pixels.
+    pub fn height(&self) -> u32 {
+        self.height
+    }
+
+    /// The colour at column `x` and row `y` (from the top), if inside.
+    pub fn pixel(&self, x: u32, y: u32) -> Option<Rgb> {
+        (x < self.width && y < self.height).then(|| {
+            let i = 3 * (y as usize * self.width as usize + x as usize);
+            [self.rgb[i], self.rgb[i + 1], self.rgb[i + 2]]
+        })
+    }
+
     fn new((width, height): (u32, u32)) -> Result<Self> {
         ensure!(width > 0 && height > 0, "empty image size {width}×{height}");
         let pixels = width as usize * height as usize;
@@ -931,23 +1241,41 @@ impl Canvas {
 
     /// Fills the "no value" swatch right of the bar.
     fn no_value_swatch(&mut self, bar: Rect) {
-        let x0 = bar.x + bar.w + 14;
-        for y in 0..bar.h {
-            for x in 0..14 {
-                let hatch = (x0 + x + bar.y + y) % 6 < 2;
-                let colour = if hatch {
-                    NO_VALUE.map(|c| c / 2 + 20)
-                } else {
-                    NO_VALUE
-                };
-                self.set(x0 + x, bar.y + y, colour);
+        let swatch = Rect {
+            x: bar.x + bar.w + 14,
+            y: bar.y,
+            w: 14,
+            h: bar.h,
+        };
+        self.fill(swatch, NO_VALUE, true);
+    }
+
+    /// Fills `rect` with `colour`, hatched as the points without a value are if `hatch`.
+    fn fill(&mut self, rect: Rect, colour: Rgb, hatch: bool) {
+        for y in rect.y..rect.y + rect.h {
+            for x in rect.x..rect.x + rect.w {
+                let dark = hatch && (x + y) % 6 < 2;
+                self.set(
+                    x,
+                    y,
+                    if dark {
+                        colour.map(|c| c / 2 + 20)
+                    } else {
+                        colour
+                    },
+                );
             }
         }
     }
 
     /// Writes the image as a PNG, atomically: into a temporary file beside `path`, then
-    /// renamed over it.
-    fn write_png(&self, path: &Path) -> Result<()> {
+    /// renamed over it, so that `path` holds the whole picture or what it held before. A file
+    /// that is replaced keeps its permissions; a new one gets those of any new file (0666 less
+    /// the umask).
+    ///
+    /// # Errors
+    /// Any I/O error, in a message naming `path`.
+    pub fn write_png(&self, path: &Path) -> Result<()> {
         let context = || format!("cannot write {}", path.display());
         let dir = match path.parent() {
             Some(dir) if !dir.as_os_str().is_empty() => dir,
@@ -956,20 +1284,30 @@ impl Canvas {
         let mut builder = tempfile::Builder::new();
         // Readable by all like any other output file, not private as temporary files are.
         #[cfg(unix)]
-        builder.permissions(std::os::unix::fs::PermissionsExt::from_mode(0o644));
+        builder.permissions(std::os::unix::fs::PermissionsExt::from_mode(0o666));
         let mut file = builder
             .prefix(".figure-")
             .suffix(".png.tmp")
             .tempfile_in(dir)
             .with_context(context)?;
-        let mut encoder =
-            png::Encoder::new(BufWriter::new(file.as_file_mut()), self.width, self.height);
-        encoder.set_color(png::ColorType::Rgb);
-        encoder.set_depth(png::BitDepth::Eight);
-        encoder.set_compression(png::Compression::High);
-        let mut writer = encoder.write_header().with_context(context)?;
-        writer.write_image_data(&self.rgb).with_context(context)?;
-        writer.finish().with_context(context)?;
+        if let Ok(existing) = std::fs::metadata(path)
+            && existing.is_file()
+        {
+            file.as_file()
+                .set_permissions(existing.permissions())
+                .with_context(context)?;
+        }
+        {
+            let mut encoder =
+                png::Encoder::new(BufWriter::new(file.as_file_mut()), self.width, self.height);
+            encoder.set_color(png::ColorType::Rgb);
+            encoder.set_depth(png::BitDepth::Eight);
+            encoder.set_compression(png::Compression::High);
+            let mut writer = encoder.write_header().with_context(context)?;
+            writer.write_image_data(&self.rgb).with_context(context)?;
+            writer.finish().with_context(context)?;
+        }
+        file.as_file().sync_all().with_context(context)?;
         file.persist(path).with_context(context)?;
         Ok(())
     }
@@ -992,9 +1330,10 @@ impl Camera {
     fn new(view: View) -> Self {
         let (sa, ca) = view.azimuth_deg.to_radians().sin_cos();
         let (se, ce) = view.elevation_deg.to_radians().sin_cos();
-        let right = [-sa, ca, 0.0];
-        let up = [-se * ca, -se * sa, ce];
-        let toward = [ce * ca, ce * sa, se];
+        // In the frame whose third axis is up, then back in world coordinates.
+        let right = view.up.to_world([-sa, ca, 0.0]);
+        let up = view.up.to_world([-se * ca, -se * sa, ce]);
+        let toward = view.up.to_world([ce * ca, ce * sa, se]);
         let l: [f64; 3] = std::array::from_fn(|i| toward[i] + 0.6 * up[i] - 0.4 * right[i]);
         let norm = dot(&l, &l).sqrt();
         Self {
@@ -1375,12 +1714,12 @@ mod tests {
         let panels = [
             Panel {
                 title: "Gaussian curvature K".to_owned(),
-                scale: ColourScale::robust_symmetric(&gauss, "K"),
+                legend: ColourScale::robust_symmetric(&gauss, "K").into(),
                 values: gauss,
             },
             Panel {
                 title: "Mean curvature H, a quarter missing".to_owned(),
-                scale: ColourScale::robust_sequential(&mean, "H"),
+                legend: ColourScale::robust_sequential(&mean, "H").into(),
                 values: mean,
             },
         ];
@@ -1515,6 +1854,112 @@ mod tests {
         let zero = vec![0.0; sphere.len()];
         let flat = splat_png(&path, "t", cloud, &zero, &bad, view, (300, 300));
         assert!(format!("{:#}", flat.expect_err("empty range")).contains("min < max"));
+    }
+
+    #[test]
+    fn views_look_from_the_named_axis_and_keep_the_up_axis_up() {
+        assert_eq!(View::parse("-60, 30", Up::Z), Ok(View::THREE_QUARTER));
+        let axes = [
+            ("+x", [1.0, 0.0, 0.0]),
+            ("-x", [-1.0, 0.0, 0.0]),
+            ("+y", [0.0, 1.0, 0.0]),
+            ("-y", [0.0, -1.0, 0.0]),
+            ("+z", [0.0, 0.0, 1.0]),
+            ("-z", [0.0, 0.0, -1.0]),
+        ];
+        for up in [Up::X, Up::Y, Up::Z] {
+            let up_axis = up.to_world([0.0, 0.0, 1.0]);
+            for (spec, direction) in axes {
+                let view = View::parse(spec, up).expect("a named view");
+                let camera = Camera::new(view);
+                let toward = dot(&camera.toward, &direction);
+                assert!((toward - 1.0).abs() < 1e-12, "{spec} {up:?}: {toward}");
+                // Screen up is the up axis unless the camera looks along it.
+                let along = dot(&direction, &up_axis).abs() > 0.5;
+                let upright = dot(&camera.up, &up_axis);
+                assert!(along || (upright - 1.0).abs() < 1e-12, "{spec} {up:?}");
+                // A right-handed screen: right × up = toward.
+                let [r, u] = [camera.right, camera.up];
+                let cross = [
+                    r[1] * u[2] - r[2] * u[1],
+                    r[2] * u[0] - r[0] * u[2],
+                    r[0] * u[1] - r[1] * u[0],
+                ];
+                assert!((dot(&cross, &camera.toward) - 1.0).abs() < 1e-12, "{spec}");
+            }
+        }
+        for bad in ["sideways", "10,95", "1,2,3", "", "nan,0"] {
+            let error = View::parse(bad, Up::Z).expect_err(bad);
+            assert!(error.contains("view"), "{error}");
+        }
+    }
+
+    #[test]
+    fn categories_colour_their_points_and_have_swatches() {
+        let sphere = fibonacci_sphere(2000, 1.0);
+        let (p, n) = (points(&sphere), normals(&sphere));
+        // Category 0 on the upper half, 5 on the lower, and one value of no category.
+        let mut codes: Vec<f64> = p
+            .iter()
+            .map(|p| if p[2] > 0.0 { 0.0 } else { 5.0 })
+            .collect();
+        codes[0] = 9.0;
+        let (blue, orange) = ([0x56, 0xb4, 0xe9], [0xd5, 0x5e, 0x00]);
+        let categories = vec![
+            Category {
+                value: 0.0,
+                label: "0 ok".to_owned(),
+                colour: blue,
+            },
+            Category {
+                value: 5.0,
+                label: "5 failed".to_owned(),
+                colour: orange,
+            },
+        ];
+        let panel = Panel {
+            title: String::new(),
+            values: codes,
+            legend: Legend::Categories(categories),
+        };
+        let cloud = Cloud {
+            points: &p,
+            normals: Some(&n),
+        };
+        let image = render(
+            "",
+            cloud,
+            &[panel],
+            View::parse("+y", Up::Z).unwrap(),
+            (500, 400),
+            1,
+        )
+        .expect("figure");
+        assert_eq!((image.width(), image.height()), (500, 400));
+        let count = |colour: Rgb, rows: std::ops::Range<u32>| {
+            rows.flat_map(|y| (0..500).map(move |x| (x, y)))
+                .filter(|&(x, y)| image.pixel(x, y) == Some(colour))
+                .count()
+        };
+        // Swatches of 14 × 14 pixels, less their frame, in the legend band.
+        let band = 400 - LEGEND_BAND..400;
+        assert!(
+            count(blue, band.clone()) >= 150,
+            "{}",
+            count(blue, band.clone())
+        );
+        assert!(count(orange, band.clone()) >= 150);
+        assert!(count(NO_VALUE, band) >= 50, "the no-value swatch");
+        // Shaded points: hues of blue above the middle of the render, of orange below.
+        let hue = |y: u32, pick: fn(Rgb) -> bool| {
+            (150..350)
+                .filter(|&x| image.pixel(x, y).is_some_and(pick))
+                .count()
+        };
+        let bluish = |c: Rgb| i32::from(c[2]) > i32::from(c[0]) + 40;
+        let orangish = |c: Rgb| i32::from(c[0]) > i32::from(c[2]) + 60;
+        assert!(hue(100, bluish) > 100 && hue(100, orangish) == 0);
+        assert!(hue(220, orangish) > 100 && hue(220, bluish) == 0);
     }
 
     #[test]
