@@ -55,6 +55,12 @@ enum Field {
     K2,
     /// Gaussian curvature k1·k2.
     Gauss,
+    /// The jet's predicted error of k1 (sequential map from the 2nd to the 98th percentile).
+    #[value(name = "k1_sd")]
+    K1Sd,
+    /// The jet's predicted error of k2.
+    #[value(name = "k2_sd")]
+    K2Sd,
     /// The status code of each point (0 ok; see `curvature --help`).
     Status,
 }
@@ -67,6 +73,8 @@ impl Field {
             Self::K1 => "k1",
             Self::K2 => "k2",
             Self::Gauss => "gauss",
+            Self::K1Sd => "k1_sd",
+            Self::K2Sd => "k2_sd",
             Self::Status => "status",
         }
     }
@@ -78,6 +86,8 @@ impl Field {
             Self::K1 => "k1, larger principal curvature, 1/(file unit)",
             Self::K2 => "k2, smaller principal curvature, 1/(file unit)",
             Self::Gauss => "Gaussian curvature k1·k2, 1/(file unit)²",
+            Self::K1Sd => "predicted error of k1, 1/(file unit)",
+            Self::K2Sd => "predicted error of k2, 1/(file unit)",
             Self::Status => "status",
         }
     }
@@ -170,6 +180,11 @@ pub fn render(a: RenderArgs) -> Result<()> {
             Legend::Categories(status_categories(&values)),
             String::new(),
         ),
+        Field::K1Sd | Field::K2Sd => {
+            let scale = ColourScale::robust_sequential(&values, a.field.label());
+            let range = format!(", colours {:.3e} to {:.3e}", scale.min, scale.max);
+            (Legend::Bar(scale), range)
+        }
         field => {
             let scale = ColourScale::robust_symmetric(&values, field.label());
             let range = format!(", colours ±{:.3e}", scale.max);

@@ -305,3 +305,56 @@ fn read_only_picture_is_refused_unless_forced() {
     let mode = fs::metadata(&out).unwrap().permissions().mode() & 0o777;
     assert_eq!(mode, 0o444, "a replaced file keeps its permissions");
 }
+
+/// `--field k1_sd` is sequential: where the predicted error is small (left half of a plane)
+/// the map's dark end, where it is large (right half) its bright end.
+#[test]
+fn predicted_error_is_dark_where_small_bright_where_large() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("plane-sd.csv");
+    let mut text = String::from("x,y,z,nx,ny,nz,k1,k2,k1_sd,status\n");
+    let n = 41;
+    for i in 0..n {
+        for j in 0..n {
+            let x = -1.0 + 2.0 * f64::from(i) / f64::from(n - 1);
+            let y = -1.0 + 2.0 * f64::from(j) / f64::from(n - 1);
+            // Small on the left half, large on the right, with a ramp so that the
+            // percentile limits fall inside each half.
+            let sd = if x < 0.0 {
+                0.01 + 0.001 * (x + 1.0)
+            } else {
+                1.0 + x
+            };
+            writeln!(text, "{x},{y},0,0,0,1,0,0,{sd},0").unwrap();
+        }
+    }
+    fs::write(&input, text).unwrap();
+    let out = dir.path().join("plane-sd.png");
+    run_ok(
+        mlscurv()
+            .arg("render")
+            .arg(&input)
+            .arg("-o")
+            .arg(&out)
+            .args(["--field", "k1_sd", "--view", "+z", "--size", "400x400"]),
+    );
+    let picture = Picture::read(&out);
+    let brightness = |xs: std::ops::Range<u32>| {
+        let rows = TITLE_BAND + 40..400 - LEGEND_BAND - 40;
+        let mut sum = 0.0;
+        let mut count = 0.0;
+        for y in rows {
+            for x in xs.clone() {
+                let [r, g, b] = picture.at(x, y);
+                sum += f64::from(r) + f64::from(g) + f64::from(b);
+                count += 1.0;
+            }
+        }
+        sum / count
+    };
+    let (left, right) = (brightness(85..180), brightness(220..315));
+    assert!(
+        left < 250.0 && right > left + 150.0,
+        "left {left:.0}, right {right:.0}"
+    );
+}
