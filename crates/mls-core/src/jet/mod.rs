@@ -1,0 +1,304 @@
+//! Weighted polynomial jets: a second-order-and-beyond curvature estimator that converges on
+//! irregularly sampled clouds, where the Amenta–Kil surface does not.
+//!
+//! At a query x with frame normal n (the input normals averaged with the jet's weight) and
+//! tangents t1, t2, every sample q within the support radius ρ whose normal faces the frame
+//! gets local coordinates `(u, v, w) = ((q − x)·t1, (q − x)·t2, (q − x)·n)` and the weight
+//! `ω = (1 − |q − x|²/ρ²)³`. The heights `w`, and with [`NormalData::Slopes`] the slopes of
+//! the samples' normals, are fitted by weighted least squares with a polynomial of total
+//! degree 4 in `(u, v)` (15 coefficients `a_ij` of `u^i v^j`; lower degrees when the
+//! neighbourhood cannot determine it):
+//!
+//! $$ \min_a \sum_i ω_i \big(w_i − P_a(u_i, v_i)\big)^2
+//!    + λ \sum_i ω_i \big|∇P_a(u_i, v_i) − s_i\big|^2. $$
+//!
+//! The fitted surface is the zero set of `F(y) = w − P(u, v)` in the frame, and at its foot
+//! point `(0, 0, a00)` above x
+//!
+//! $$ ∇F = n − a_{10} t_1 − a_{01} t_2, \qquad
+//!    H = −\big(2a_{20}\, t_1t_1^T + a_{11}(t_1t_2^T + t_2t_1^T) + 2a_{02}\, t_2t_2^T\big), $$
+//!
+//! which [`crate::curvature()`] turns into k1, k2 and directions with the product's sign
+//! convention. The frame normal only has to be roughly right: the linear terms absorb a tilt.
+//!
+//! **Noise and predicted error.** The residuals of each kind of data give its noise estimate
+//! (`σ̂² = Σω r² / (Σω − tr(M⁻¹M₂))`, unbiased for independent noise) and λ, their ratio. The
+//! coefficients' covariance is `σ̂² M⁻¹M₂M⁻¹` for heights alone and the cluster-robust
+//! sandwich (one cluster per sample) with slopes. Its (a20, a11, a02) block, pushed through
+//! the first-order change of each principal curvature
+//! (`δk = −2(c² δa20 + cs δa11 + s² δa02)/|∇F|` along the direction `(c, s)`), is the
+//! predicted standard deviation of k1 and k2.
+//!
+//! **Scale.** Support radii `ρ_j = ρ_0 √2^j` form a ladder, climbed while the confidence
+//! intervals `k_j ± Γ sd_j` of every scale so far intersect and the bias has not overtaken
+//! the scatter; the returned scale has the least estimated `sd² + bias²` ([`choose_scale`]).
+//! Fits too thin to trust their own noise estimate ([`trusted`]) are candidates only.
+//! `docs/derivation.md` has the details and `mls_ad::jet_witness` recomputes all of it.
+
+use crate::curvature::{Curvature, curvature};
+use crate::math::{Matrix, Point, Vector, tangent_basis};
+use crate::status::PointStatus;
+
+mod fit;
+
+pub use fit::{JetScratch, fit};
+
+/// Exponents `(i, j)` of the monomials `u^i v^j`, by total degree: the first
+/// `(d + 1)(d + 2)/2` are the basis of degree `d`.
+pub const MONOMIALS: [(i32, i32); 15] = [
+    (0, 0),
+    (1, 0),
+    (0, 1),
+    (2, 0),
+    (1, 1),
+    (0, 2),
+    (3, 0),
+    (2, 1),
+    (1, 2),
+    (0, 3),
+    (4, 0),
+    (3, 1),
+    (2, 2),
+    (1, 3),
+    (0, 4),
+];
+
+const A10: usize = 1;
+const A01: usize = 2;
+const A20: usize = 3;
+const A11: usize = 4;
+const A02: usize = 5;
+
+/// Number of coefficients of a jet of total degree `degree`.
+pub const fn coefficient_count(degree: usize) -> usize {
+    (degree + 1) * (degree + 2) / 2
+}
+
+/// Parameters of the jet estimator.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct JetConfig {
+    /// Highest total degree of the polynomial (2 to 4).
+    pub degree: usize,
+    /// Support radius of the first scale, in units of the surface's h.
+    pub radius: f64,
+    /// Number of scales, each √2 times the previous.
+    pub scales: usize,
+    /// Γ, the half-width of the confidence intervals, in predicted standard deviations.
+    pub confidence: f64,
+    /// Whether the samples' normals enter the fit.
+    pub normals: NormalData,
+}
+
+impl Default for JetConfig {
+    fn default() -> Self {
+        Self {
+            degree: 4,
+            radius: 1.5,
+            scales: 5,
+            confidence: 3.0,
+            normals: NormalData::Slopes,
+        }
+    }
+}
+
+impl JetConfig {
+    /// The largest support radius of the ladder, in units of h.
+    pub fn max_radius(&self) -> f64 {
+        self.radius * std::f64::consts::SQRT_2.powi(self.scales.max(1) as i32 - 1)
+    }
+}
+
+/// One weighted fit at one support radius.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct JetFit {
+    /// The degree actually fitted (lower than asked when the neighbourhood is too thin).
+    pub degree: usize,
+    /// Support radius ρ.
+    pub radius: f64,
+    /// Samples within the support.
+    pub neighbours: usize,
+    /// Equations of the fit: one height per sample, and two slopes per sample whose normal
+    /// enters the fit.
+    pub equations: usize,
+    /// Coefficients `a_ij` of `u^i v^j` in the frame, in file units; unused ones are 0.
+    pub coefficients: [f64; 15],
+    /// Estimated position noise σ̂ (residual standard deviation of the heights), file units.
+    pub noise: f64,
+    /// Estimated covariance of `(a20, a11, a02)`.
+    pub covariance: Matrix,
+}
+
+/// Curvature from a jet, with its predicted error.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct JetPoint {
+    /// The foot point of the query on the fitted surface (`x + a00 n`).
+    pub foot: Point,
+    /// Principal curvatures and directions at the foot point.
+    pub curvature: Curvature,
+    /// Predicted standard deviations of k1 and k2 from the noise of the fit.
+    pub sd: [f64; 2],
+    /// Estimated bias of k1 and k2 at this scale, from the line through the ladder's estimates
+    /// ([`choose_scale`]); 0 when only one scale was fitted.
+    pub bias: [f64; 2],
+    /// The fit the result comes from.
+    pub fit: JetFit,
+}
+
+/// Whether, and how, the samples' normals enter the fit.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum NormalData {
+    /// Heights only.
+    Ignore,
+    /// Heights and the slopes `−ν_u/ν_w`, `−ν_v/ν_w` of each sample's normal ν (within 60° of
+    /// the frame normal), weighted against the heights by their estimated noise.
+    Slopes,
+}
+
+impl JetPoint {
+    /// k1 (`i = 0`) or k2 (`i = 1`).
+    pub fn curvature_k(&self, i: usize) -> f64 {
+        if i == 0 {
+            self.curvature.k1
+        } else {
+            self.curvature.k2
+        }
+    }
+
+    /// Predicted error of k1 and k2: `√(sd² + bias²)`.
+    pub fn predicted_error(&self) -> [f64; 2] {
+        [0, 1].map(|i| self.sd[i].hypot(self.bias[i]))
+    }
+}
+
+/// Whether climbing further cannot lower the error: the previous scale's bias, estimated from
+/// the last step, already exceeds its scatter (`Σ b² > Σ sd²` over k1, k2), or that scatter
+/// is at the rounding floor. Beyond that point the bias grows fourfold per step while the
+/// scatter falls at most √8-fold (`∝ 1/(ρ² √N)`).
+pub fn past_optimum(ladder: &[JetPoint]) -> bool {
+    let [.., a, b] = ladder else {
+        return false;
+    };
+    let (bias2, sd2): (f64, f64) = (0..2)
+        .map(|i| {
+            let bias = (b.curvature_k(i) - a.curvature_k(i)).abs() / 3.0;
+            (bias * bias, a.sd[i] * a.sd[i])
+        })
+        .fold((0.0, 0.0), |(x, y), (p, q)| (x + p, y + q));
+    // A scatter at the rounding floor leaves no noise to average away either.
+    let floor = 2.0 * SD_FLOOR / a.fit.radius;
+    bias2 > sd2 || a.sd.iter().all(|&sd| sd <= floor)
+}
+
+/// The scale of least estimated mean squared error among the scales the confidence intervals
+/// accepted.
+///
+/// `ladder` holds the fits in increasing radius; the first `accepted` are the candidates (a
+/// last one may be the fit the intervals rejected). The bias of a degree-4 fit grows as ρ⁴, so
+/// every fit of the ladder, rejected one included, enters one weighted least-squares line
+/// `k_j = k* + c t_j`, `t_j = (ρ_j/ρ_0)⁴`, weights `1/sd_j²`, per principal curvature; scale
+/// j's bias is `t_j √(c² + var c)`. With two fits this is the step between them over 3 with
+/// the step's own scatter; with more, the steps average. Counting `var c` keeps a scale whose
+/// step is small by chance from being chosen with an under-predicted error. The chosen point
+/// carries that bias, which enters its predicted error. Under noise the scatter falls with the
+/// scale and a larger one wins; on clean data the bias grows and the smallest wins.
+///
+/// # Panics
+/// If `accepted` is 0.
+pub fn choose_scale(ladder: &[JetPoint], accepted: usize) -> JetPoint {
+    let growth = bias_growth(ladder);
+    let r0 = ladder[0].fit.radius;
+    let mut best: Option<(f64, JetPoint)> = None;
+    for p in &ladder[..accepted] {
+        let t = (p.fit.radius / r0).powi(4);
+        let bias = growth.map(|g| t * g);
+        let candidate = JetPoint { bias, ..*p };
+        let [e1, e2] = candidate.predicted_error();
+        let mse = e1 * e1 + e2 * e2;
+        if best.as_ref().is_none_or(|(m, _)| mse < *m) {
+            best = Some((mse, candidate));
+        }
+    }
+    best.map(|(_, p)| p).expect("a non-empty ladder")
+}
+
+/// `√(c² + var c)` of the weighted line `k_j = k* + c (ρ_j/ρ_0)⁴` through the ladder, for k1
+/// and k2; 0 with fewer than two fits.
+fn bias_growth(ladder: &[JetPoint]) -> [f64; 2] {
+    if ladder.len() < 2 {
+        return [0.0; 2];
+    }
+    let r0 = ladder[0].fit.radius;
+    [0, 1].map(|i| {
+        let (mut sw, mut swt, mut swtt, mut swk, mut swtk) = (0.0, 0.0, 0.0, 0.0, 0.0);
+        for p in ladder {
+            let t = (p.fit.radius / r0).powi(4);
+            let w = 1.0 / (p.sd[i] * p.sd[i]);
+            let k = p.curvature_k(i);
+            sw += w;
+            swt += w * t;
+            swtt += w * t * t;
+            swk += w * k;
+            swtk += w * t * k;
+        }
+        let det = sw * swtt - swt * swt;
+        let c = (sw * swtk - swt * swk) / det;
+        (c * c + sw / det).sqrt()
+    })
+}
+
+/// Equations per coefficient for a fit to enter the ladder's stopping rules (see [`trusted`]).
+pub const TRUSTED_EQUATIONS_PER_COEFFICIENT: f64 = 3.0;
+
+/// Whether a fit has enough equations for its own noise estimate to be trusted by the ladder's
+/// stopping rules: 3 per coefficient. The weight `(1 − d²/ρ²)³` leaves an effective sample
+/// size `(Σω)²/Σω²` of 7/16 of the count on a uniform disc, so at 1.5 equations per coefficient
+/// (enough to determine the fit) the weighted residuals have almost no degrees of freedom left,
+/// σ̂ is unreliable, and one wild fit would stop the climb. Such a fit stays a candidate for
+/// the final choice, where on clean data its small bias wins.
+pub fn trusted(fit: &JetFit) -> bool {
+    fit.equations as f64 >= TRUSTED_EQUATIONS_PER_COEFFICIENT * coefficient_count(fit.degree) as f64
+}
+
+/// Equations (heights and slopes) per coefficient a degree needs.
+pub const MIN_EQUATIONS_PER_COEFFICIENT: f64 = 1.5;
+
+/// Predicted standard deviations never fall below this fraction of `1/ρ`: below it an exact
+/// fit's residual is rounding, and a zero-width interval would make the scale choice follow it.
+pub const SD_FLOOR: f64 = 1e-8;
+
+/// Curvature of a fit at its foot point, with the predicted standard deviations.
+pub fn jet_curvature(
+    x: &Point,
+    frame: &(Vector, Vector, Vector),
+    fit: &JetFit,
+) -> Result<JetPoint, PointStatus> {
+    let (t1, t2, n) = frame;
+    let a = &fit.coefficients;
+    let gradient = n - t1 * a[A10] - t2 * a[A01];
+    let hessian = -(t1 * t1.transpose() * (2.0 * a[A20])
+        + (t1 * t2.transpose() + t2 * t1.transpose()) * a[A11]
+        + t2 * t2.transpose() * (2.0 * a[A02]));
+    let c = curvature(&gradient, &hessian).ok_or(PointStatus::GradientVanishes)?;
+    let len = gradient.norm();
+    let sd = [c.d1, c.d2].map(|d| {
+        let (cs, sn) = (d.dot(t1), d.dot(t2));
+        let g = Vector::new(cs * cs, cs * sn, sn * sn) * (2.0 / len);
+        g.dot(&(fit.covariance * g))
+            .max(0.0)
+            .sqrt()
+            .max(SD_FLOOR / fit.radius)
+    });
+    Ok(JetPoint {
+        foot: x + n * a[0],
+        curvature: c,
+        sd,
+        bias: [0.0; 2],
+        fit: *fit,
+    })
+}
+
+/// A right-handed frame `(t1, t2, n)` around the unit normal `n`.
+pub fn frame(n: &Vector) -> (Vector, Vector, Vector) {
+    let (t1, t2) = tangent_basis(n);
+    (t1, t2, *n)
+}
