@@ -350,6 +350,16 @@ pub fn normals(a: NormalsArgs) -> Result<()> {
             )
         })?;
         let (nrm, status) = evaluate::normals_columns(&est.normals);
+        // A file of 0 0 0 normals with exit status 0 would pass a script's check.
+        if !status.is_empty() && status.iter().all(|&s| s != 0) {
+            anyhow::bail!(
+                "{name}: no normal could be estimated at any of its {} points ({}); nothing \
+                 written (points on a line, or fewer than needed for a neighbourhood, have no surface \
+                 normal)",
+                status.len(),
+                pipeline::status_counts(&status)
+            );
+        }
         let mut columns = Vec::new();
         columns.extend(vector_columns(["x", "y", "z"], &cloud.points));
         columns.extend(vector_columns(["nx", "ny", "nz"], &nrm));

@@ -131,3 +131,26 @@ fn normals_file_feeds_back_into_curvature_with_status_ok_and_the_same_orientatio
         "{flipped} curvature normals point against the file normals"
     );
 }
+
+/// Points on a line have no normal anywhere: `normals` fails with one line naming the file
+/// and writes nothing, rather than a file of `0 0 0` with exit status 0.
+#[test]
+fn no_normal_anywhere_is_an_error_and_writes_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("line.xyz");
+    let text: String = (0..200)
+        .map(|i| format!("{} 0 0\n", f64::from(i) * 0.01))
+        .collect();
+    std::fs::write(&input, text).unwrap();
+    let out = dir.path().join("line-normals.xyz");
+    let r = crate::common::run(
+        mlscurv()
+            .arg("normals")
+            .arg(&input)
+            .arg("-o")
+            .arg(&out)
+            .arg("--quiet"),
+    );
+    crate::common::assert_one_line_error(&r, "line.xyz", &["no normal", "200 points"]);
+    assert!(!out.exists(), "an output was written");
+}
