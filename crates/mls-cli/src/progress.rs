@@ -11,14 +11,14 @@ use indicatif::{ProgressBar, ProgressStyle};
 /// on it (see `mls_core::stream`).
 pub const CHUNK: usize = mls_core::DEFAULT_CHUNK;
 
-/// A bar over `n` points, cleared when dropped; nothing unless `show` and there is more than
-/// one chunk.
+/// A bar over `n` points, moved at each chunk and cleared when dropped; nothing unless `show`.
+/// A single chunk still gets its bar: the slow estimators take seconds for one.
 #[derive(Debug)]
 pub struct Bar(Option<ProgressBar>);
 
 impl Bar {
     pub fn new(n: usize, label: &str, show: bool) -> Self {
-        Self((show && n > CHUNK).then(|| {
+        Self((show && n > 0).then(|| {
             let bar = ProgressBar::new(n as u64).with_message(label.to_string());
             if let Ok(style) =
                 ProgressStyle::with_template("{msg:>12} [{bar:40}] {pos}/{len} ({eta} left)")
