@@ -277,7 +277,7 @@ impl MlsSurface {
         &self,
         x: &Point,
         radius: f64,
-        hits: &mut Vec<usize>,
+        hits: &mut Vec<u32>,
         out: &mut Vec<Sample>,
     ) {
         hits.clear();
@@ -285,9 +285,9 @@ impl MlsSurface {
             .query(&x.coords.into())
             .within::<SquaredEuclidean<f64>>(radius * radius)
             .unsorted()
-            .visit(|hit| hits.push(hit.item as usize));
+            .visit(|hit| hits.push(hit.item as u32));
         hits.sort_unstable();
-        out.extend(hits.iter().map(|&i| self.samples[i]));
+        out.extend(hits.iter().map(|&i| self.samples[i as usize]));
     }
 
     fn map_queries<F>(&self, queries: &[Point], par: Parallelism, f: F) -> Vec<PointResult>
@@ -343,8 +343,8 @@ pub struct Evaluator<'a> {
     support: Vec<Sample>,
     /// Samples near a cluster of queries, filtered per query into `support`.
     candidates: Vec<Sample>,
-    /// Indices of `candidates`, sorted into storage order.
-    hits: Vec<usize>,
+    /// Indices of `candidates`, sorted into storage order (at most `u32::MAX` samples).
+    hits: Vec<u32>,
     scratch: FieldScratch,
     line: Vec<LineBlock>,
     /// The jet's fits up the ladder of scales at one query.
