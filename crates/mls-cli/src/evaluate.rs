@@ -1,5 +1,5 @@
-//! Evaluation of a built surface at every point, streamed chunk by chunk, into the output columns of
-//! `mlscurv curvature`, `project` and `normals`.
+//! Evaluation of a built surface at every point, streamed chunk by chunk, into the output
+//! columns of `mlscurv curvature`, `project` and `normals`.
 
 use std::ops::Range;
 
