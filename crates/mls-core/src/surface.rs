@@ -285,7 +285,7 @@ impl MlsSurface {
             .query(&x.coords.into())
             .within::<SquaredEuclidean<f64>>(radius * radius)
             .unsorted()
-            .visit(|hit| hits.push(hit.item as u32));
+            .visit(|hit| hits.push(hit.item));
         hits.sort_unstable();
         out.extend(hits.iter().map(|&i| self.samples[i as usize]));
     }
