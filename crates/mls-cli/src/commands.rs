@@ -37,7 +37,7 @@ pub fn curvature(a: CurvatureArgs) -> Result<()> {
         adaptive: a.adaptive,
     };
     pipeline::with_threads(s.run.threads, || {
-        let mut t = Timings::default();
+        let mut t = Timings::new(interactive(s.run.quiet));
         let Prepared {
             points,
             built:
@@ -60,8 +60,9 @@ pub fn curvature(a: CurvatureArgs) -> Result<()> {
         carried.check(output.format(), &a.input)?;
         let jet = evaluate::jet_config(normals_from_file);
         let n = points.len();
-        let mut out = t.time(evaluate::curvature_label(a.at), || {
-            evaluate::curvature(&points, &surface, &options, &jet, interactive(s.run.quiet))
+        let show = t.show();
+        let mut out = t.measure(evaluate::curvature_label(a.at), || {
+            evaluate::curvature(&points, &surface, &options, &jet, show)
         });
         // The surface's samples and tree are not needed for writing.
         drop(surface);
@@ -199,7 +200,7 @@ pub fn eval(a: EvalArgs) -> Result<()> {
 }
 
 fn eval_with(a: &EvalArgs, output: &pipeline::Output) -> Result<()> {
-    let mut t = Timings::default();
+    let mut t = Timings::new(interactive(a.run.quiet));
     let cloud_name = pipeline::input_name(&a.cloud);
     let cloud = t.time("read", || {
         pipeline::read(&a.cloud, a.formats.input_format, a.columns.as_ref())
@@ -321,7 +322,7 @@ fn eval_with(a: &EvalArgs, output: &pipeline::Output) -> Result<()> {
 pub fn normals(a: NormalsArgs) -> Result<()> {
     let output = output(&[&a.input], &a.out)?;
     pipeline::with_threads(a.run.threads, || {
-        let mut t = Timings::default();
+        let mut t = Timings::new(interactive(a.run.quiet));
         let par = Parallelism::Rayon;
         let mut cloud = t.time("read", || {
             pipeline::read(&a.input, a.out.formats.input_format, a.columns.as_ref())
@@ -393,7 +394,7 @@ pub fn project(a: ProjectArgs) -> Result<()> {
     let output = output(&[&a.input], &a.out)?;
     let s = &a.surface;
     pipeline::with_threads(s.run.threads, || {
-        let mut t = Timings::default();
+        let mut t = Timings::new(interactive(s.run.quiet));
         let Prepared {
             points,
             built:
@@ -415,8 +416,9 @@ pub fn project(a: ProjectArgs) -> Result<()> {
         let mut carried = keep(carried, &a.out);
         carried.check(output.format(), &a.input)?;
         let n = points.len();
-        let out = t.time("projection", || {
-            evaluate::projection(&points, &surface, interactive(s.run.quiet))
+        let show = t.show();
+        let out = t.measure("projection", || {
+            evaluate::projection(&points, &surface, show)
         });
         drop(surface);
         drop(points);

@@ -1,13 +1,16 @@
-//! Evaluation of a built surface at every point, chunk by chunk, into the output columns of
-//! `mlscurv curvature`, `project` and `normals`.
+//! Evaluation of a built surface at every point, streamed chunk by chunk, into the output
+//! columns of `mlscurv curvature`, `project` and `normals`.
+
+use std::ops::Range;
 
 use mls_core::{
     AdaptiveSurface, Curvature, JetConfig, JetPoint, Location, MlsSurface, NormalData, Parallelism,
-    Point, PointStatus, Vector,
+    Point, PointResult, PointStatus, Vector,
 };
 use mls_io::{Axis, Column};
 
 use crate::pipeline::Surface;
+use crate::progress::{Bar, CHUNK};
 use crate::{At, CurvatureOptions, Method, status_code};
 
 const NAN3: [f64; 3] = [f64::NAN; 3];
@@ -151,9 +154,10 @@ impl CurvatureColumns {
     }
 }
 
-/// Evaluates `surface` at every one of `points` in chunks of [`crate::progress::chunked`]
-/// (the chunk size changes results at the rounding level, so the binary and the Python
-/// package both go through here), drawing a progress bar on stderr if `show`.
+/// Evaluates `surface` at every one of `points` through mls-core's streams, in chunks of
+/// [`CHUNK`] results, drawing a progress bar on stderr if `show`. The binary and the Python
+/// package both go through here, so they give the same columns; the results do not depend on
+/// the chunk (see `mls_core::stream`).
 ///
 /// `jet` is used with [`Method::Jet`] ([`jet_config`]); `--adaptive` requires `surface` to be
 /// [`Surface::Adaptive`].
@@ -167,12 +171,11 @@ pub fn curvature(
     let par = Parallelism::Rayon;
     let n = points.len();
     let mut out = CurvatureColumns::with_capacity(n, options);
-    let label = curvature_label(options.at);
-    crate::progress::chunked(n, label, show, |range| {
-        let chunk = &points[range];
-        match surface {
-            Surface::Fixed(surface) if options.method == Method::Jet => {
-                for (r, p) in surface.jet_at_points(chunk, jet, par).iter().zip(chunk) {
+    let bar = Bar::new(n, curvature_label(options.at), show);
+    match surface {
+        Surface::Fixed(surface) if options.method == Method::Jet => {
+            surface.jet_stream(points, jet, par, CHUNK, |range, results| {
+                for (r, p) in results.iter().zip(&points[range.clone()]) {
                     let at = |j: &JetPoint| match options.at {
                         At::Input => *p,
                         At::Projected => j.foot,
@@ -182,29 +185,31 @@ pub fn curvature(
                     out.k1_sd.push(sd[0]);
                     out.k2_sd.push(sd[1]);
                 }
-            }
-            Surface::Fixed(surface) => {
-                let results = match options.at {
-                    At::Input => surface.curvature_at_points(chunk, par),
-                    At::Projected => surface.project_points(chunk, par),
-                };
-                for (r, p) in results.iter().zip(chunk) {
+                bar.set(range.end);
+            });
+        }
+        Surface::Fixed(surface) => {
+            let mut sink = |range: Range<usize>, results: &[PointResult]| {
+                for (r, p) in results.iter().zip(&points[range.clone()]) {
                     out.push(
                         r.as_ref().map(|s| (s.point, s.curvature)).map_err(|e| *e),
                         p,
                     );
                 }
+                bar.set(range.end);
+            };
+            match options.at {
+                At::Input => surface.curvature_stream(points, par, CHUNK, &mut sink),
+                At::Projected => surface.projection_stream(points, par, CHUNK, &mut sink),
             }
-            Surface::Adaptive(surface) => {
-                let at = match options.at {
-                    At::Input => Location::Input,
-                    At::Projected => Location::Projected,
-                };
-                for (r, p) in surface
-                    .curvature_at_points(chunk, at, par)
-                    .iter()
-                    .zip(chunk)
-                {
+        }
+        Surface::Adaptive(surface) => {
+            let at = match options.at {
+                At::Input => Location::Input,
+                At::Projected => Location::Projected,
+            };
+            surface.curvature_stream(points, at, par, CHUNK, |range, results| {
+                for (r, p) in results.iter().zip(&points[range.clone()]) {
                     out.push(
                         r.as_ref().map(|s| (s.point, s.curvature)).map_err(|e| *e),
                         p,
@@ -213,9 +218,10 @@ pub fn curvature(
                     out.h.push(h);
                     out.noise.push(noise);
                 }
-            }
+                bar.set(range.end);
+            });
         }
-    });
+    }
     out
 }
 
@@ -253,7 +259,8 @@ pub struct Projection {
     pub moved: Vec<f64>,
 }
 
-/// Projects every one of `points` onto `surface` in chunks, as `mlscurv project` does.
+/// Projects every one of `points` onto `surface` through mls-core's stream, as `mlscurv
+/// project` does.
 pub fn projection(points: &[Point], surface: &MlsSurface, show: bool) -> Projection {
     let par = Parallelism::Rayon;
     let n = points.len();
@@ -263,10 +270,9 @@ pub fn projection(points: &[Point], surface: &MlsSurface, show: bool) -> Project
         status: Vec::with_capacity(n),
         moved: Vec::new(),
     };
-    crate::progress::chunked(n, "projection", show, |range| {
-        let chunk = &points[range];
-        let results = surface.project_points(chunk, par);
-        for (r, p) in results.iter().zip(chunk) {
+    let bar = Bar::new(n, "projection", show);
+    surface.projection_stream(points, par, CHUNK, |range, results| {
+        for (r, p) in results.iter().zip(&points[range.clone()]) {
             out.status.push(status_code(r));
             match r {
                 Ok(sp) => {
@@ -282,6 +288,7 @@ pub fn projection(points: &[Point], surface: &MlsSurface, show: bool) -> Project
                 }
             }
         }
+        bar.set(range.end);
     });
     out
 }

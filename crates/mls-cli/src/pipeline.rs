@@ -22,12 +22,30 @@ use crate::{Format, NormalsMode, SurfaceOptions};
 /// besides the centre, the MLS evaluation at least 3 samples.
 pub const MIN_POINTS: usize = 4;
 
-/// Wall-clock time of the named stages, for the summary.
+/// Wall-clock time of the named stages, for the summary, and whether to show a spinner on
+/// stderr while one runs ([`Timings::default`] shows none).
 #[derive(Debug, Default)]
-pub struct Timings(pub Vec<(&'static str, f64)>);
+pub struct Timings(pub Vec<(&'static str, f64)>, bool);
 
 impl Timings {
+    /// Timings that show progress if `show` (stderr a terminal and no `--quiet`).
+    pub fn new(show: bool) -> Self {
+        Self(Vec::new(), show)
+    }
+
+    /// Whether progress is shown.
+    pub fn show(&self) -> bool {
+        self.1
+    }
+
+    /// Runs and times `stage` under a spinner.
     pub fn time<T>(&mut self, stage: &'static str, f: impl FnOnce() -> T) -> T {
+        let _spinner = crate::progress::Spinner::new(stage, self.1);
+        self.measure(stage, f)
+    }
+
+    /// Runs and times `stage`, which draws its own progress.
+    pub fn measure<T>(&mut self, stage: &'static str, f: impl FnOnce() -> T) -> T {
         let t = Instant::now();
         let out = f();
         self.0.push((stage, t.elapsed().as_secs_f64()));

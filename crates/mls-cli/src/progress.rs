@@ -1,44 +1,72 @@
-//! Chunked parallel evaluation with an optional progress bar.
+//! Progress on stderr: a bar over the evaluation, a spinner over the other stages. Drawn only
+//! when the caller says so (stderr a terminal and no `--quiet`).
 
-use std::ops::Range;
+use std::time::Duration;
 
 use indicatif::{ProgressBar, ProgressStyle};
 
-/// Large enough that rayon's per-chunk set-up is negligible, small enough for a live bar and
-/// for the full per-point results of one chunk (about 1.2 KB a point while mls-core collects
-/// them, 19 MB here) to stay a small part of the peak memory: at 65,536 they were 77 MB, a
-/// quarter of the command's peak on a million points.
-///
-/// `MlsSurface::curvature_at_points` groups the queries of one call into Morton-ordered clusters
-/// that share a neighbour search, and the support's order, hence the last bits of a sum, depends
-/// on the cluster. Changing this size therefore changes results at the rounding level (about
-/// 1e-14 in curvature; more in principal directions where k1 ≈ k2 leaves them undefined).
-const CHUNK: usize = 1 << 14;
+/// The evaluation's chunk: how often the bar moves, and how many full per-point results (about
+/// 1.2 KB a point while mls-core collects them, 19 MB here) are held at a time: at 65,536 they
+/// were 77 MB, a quarter of the command's peak on a million points. The results do not depend
+/// on it (see `mls_core::stream`).
+pub const CHUNK: usize = mls_core::DEFAULT_CHUNK;
 
-/// Runs `f` over `0..n` in chunks, in order, drawing a bar on stderr when `show` is set. `f`
-/// consumes each chunk's results, so that only one chunk of them is held at a time.
-pub fn chunked(n: usize, label: &str, show: bool, mut f: impl FnMut(Range<usize>)) {
-    let bar = if show && n > CHUNK {
-        let bar = ProgressBar::new(n as u64).with_message(label.to_string());
-        if let Ok(style) =
-            ProgressStyle::with_template("{msg:>12} [{bar:40}] {pos}/{len} ({eta} left)")
-        {
-            bar.set_style(style.progress_chars("=> "));
-        }
-        Some(bar)
-    } else {
-        None
-    };
-    let mut start = 0;
-    while start < n {
-        let end = (start + CHUNK).min(n);
-        f(start..end);
-        if let Some(bar) = &bar {
-            bar.set_position(end as u64);
-        }
-        start = end;
+/// A bar over `n` points, moved at each chunk and cleared when dropped; nothing unless `show`.
+/// A single chunk still gets its bar: the slow estimators take seconds for one.
+#[derive(Debug)]
+pub struct Bar(Option<ProgressBar>);
+
+impl Bar {
+    pub fn new(n: usize, label: &str, show: bool) -> Self {
+        Self((show && n > 0).then(|| {
+            let bar = ProgressBar::new(n as u64).with_message(label.to_string());
+            if let Ok(style) =
+                ProgressStyle::with_template("{msg:>12} [{bar:40}] {pos}/{len} ({eta} left)")
+            {
+                bar.set_style(style.progress_chars("=> "));
+            }
+            bar
+        }))
     }
-    if let Some(bar) = bar {
-        bar.finish_and_clear();
+
+    /// Marks the first `done` points as finished.
+    pub fn set(&self, done: usize) {
+        if let Some(bar) = &self.0 {
+            bar.set_position(done as u64);
+        }
+    }
+}
+
+impl Drop for Bar {
+    fn drop(&mut self) {
+        if let Some(bar) = &self.0 {
+            bar.finish_and_clear();
+        }
+    }
+}
+
+/// A spinner with the stage's name and elapsed time, ticking on its own thread (the stage's
+/// work gives it no occasion to), cleared when dropped; nothing unless `show`.
+#[derive(Debug)]
+pub struct Spinner(Option<ProgressBar>);
+
+impl Spinner {
+    pub fn new(label: &str, show: bool) -> Self {
+        Self(show.then(|| {
+            let spinner = ProgressBar::new_spinner().with_message(label.to_string());
+            if let Ok(style) = ProgressStyle::with_template("{msg:>12} {spinner} {elapsed}") {
+                spinner.set_style(style);
+            }
+            spinner.enable_steady_tick(Duration::from_millis(100));
+            spinner
+        }))
+    }
+}
+
+impl Drop for Spinner {
+    fn drop(&mut self) {
+        if let Some(spinner) = &self.0 {
+            spinner.finish_and_clear();
+        }
     }
 }

@@ -5,7 +5,8 @@
 //! field n(x) (Eq. 2) and the energy e (Eq. 4) define the MLS surface as the zero set of g
 //! (Eq. 5, 7). This crate evaluates g, its gradient and Hessian in closed form ([`field`]),
 //! turns them into curvature ([`curvature()`]), projects points onto the surface
-//! ([`projection`]), and does both over whole clouds ([`MlsSurface`]).
+//! ([`projection`]), and does both over whole clouds ([`MlsSurface`]), at once or chunk by
+//! chunk ([`stream`]).
 //!
 //! **Sign convention.** Curvature is positive where the surface bends away from the oriented
 //! normal: a unit sphere with outward normals has `k1 = k2 = mean = gauss = 1`;
@@ -24,6 +25,7 @@ pub mod math;
 pub mod normals;
 pub mod projection;
 pub mod status;
+pub mod stream;
 pub mod surface;
 
 pub use adaptive::{
@@ -42,6 +44,7 @@ pub use normals::{
 };
 pub use projection::{LineDerivatives, ProjectionConfig};
 pub use status::PointStatus;
+pub use stream::DEFAULT_CHUNK;
 pub use surface::{Evaluator, MlsConfig, MlsSurface, Parallelism, PointResult, SurfacePoint};
 
 /// The README's Rust example, compiled and run as a doctest so that it cannot drift.

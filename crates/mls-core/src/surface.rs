@@ -155,6 +155,7 @@ impl MlsSurface {
             surface: self,
             support: Vec::new(),
             candidates: Vec::new(),
+            hits: Vec::new(),
             scratch: FieldScratch::default(),
             line: Vec::new(),
             ladder: Vec::new(),
@@ -165,7 +166,9 @@ impl MlsSurface {
     /// Curvature at each query point (the level set of g through it), in query order.
     ///
     /// Queries are processed in Morton order, in clusters of nearby points that share one
-    /// neighbour search (the k-d tree query is a third of the cost of a point otherwise).
+    /// neighbour search (the k-d tree query is a third of the cost of a point otherwise). Each
+    /// query's support is summed in storage order, so its result does not depend on the
+    /// other queries of the call (see [`crate::stream`]).
     pub fn curvature_at_points(&self, queries: &[Point], par: Parallelism) -> Vec<PointResult> {
         let Some(radius) = self.kernel.support_radius() else {
             return self.map_queries(queries, par, |ev, q| ev.curvature_at(q));
@@ -267,6 +270,26 @@ impl MlsSurface {
             .visit(|hit| out.push(self.samples[hit.item as usize]));
     }
 
+    /// Appends to `out` the samples within `radius` of `x` (internal frame), in storage order.
+    /// The tree's order depends on `x`; storage order does not, so a support filtered from
+    /// these samples sums in the same order whichever point they were gathered around.
+    fn samples_within_ordered(
+        &self,
+        x: &Point,
+        radius: f64,
+        hits: &mut Vec<u32>,
+        out: &mut Vec<Sample>,
+    ) {
+        hits.clear();
+        self.tree
+            .query(&x.coords.into())
+            .within::<SquaredEuclidean<f64>>(radius * radius)
+            .unsorted()
+            .visit(|hit| hits.push(hit.item));
+        hits.sort_unstable();
+        out.extend(hits.iter().map(|&i| self.samples[i as usize]));
+    }
+
     fn map_queries<F>(&self, queries: &[Point], par: Parallelism, f: F) -> Vec<PointResult>
     where
         F: Fn(&mut Evaluator<'_>, &Point) -> PointResult + Sync,
@@ -320,6 +343,8 @@ pub struct Evaluator<'a> {
     support: Vec<Sample>,
     /// Samples near a cluster of queries, filtered per query into `support`.
     candidates: Vec<Sample>,
+    /// Indices of `candidates`, sorted into storage order (at most `u32::MAX` samples).
+    hits: Vec<u32>,
     scratch: FieldScratch,
     line: Vec<LineBlock>,
     /// The jet's fits up the ladder of scales at one query.
@@ -535,8 +560,12 @@ impl Evaluator<'_> {
         }
         self.candidates.clear();
         let s = self.surface;
-        let reach = radius + spread;
-        s.samples_within(&centre, reach, &mut self.candidates);
+        // The margin keeps every sample within `radius` of a query among the candidates
+        // despite rounding in `spread` and in the tree's distances: a query's support is then
+        // exactly its own, in storage order, whatever cluster it falls in (so results do not
+        // depend on how the queries are grouped or chunked).
+        let reach = (radius + spread) * (1.0 + 1e-9);
+        s.samples_within_ordered(&centre, reach, &mut self.hits, &mut self.candidates);
         let r2 = radius * radius;
         let inv_h2 = s.kernel.inv_h2();
         let min_neighbours = s.config.min_neighbours;

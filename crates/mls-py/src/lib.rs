@@ -2,7 +2,7 @@
 //! (`pip install ./crates/mls-py`).
 //!
 //! Every function runs the steps of the `mlscurv` command of the same name through
-//! [`mls_cli`]'s library (the same h, normals, surface and chunked evaluation), so that the
+//! [`mls_cli`]'s library (the same h, normals, surface and streamed evaluation), so that the
 //! numbers are the command's bit for bit and the errors carry its messages; the array named
 //! `points` (or `normals`) stands where the command names the file. This crate only converts:
 //! numpy arrays in (a float64 C-contiguous (N, 3) array is borrowed, not copied), numpy arrays

@@ -8,4 +8,5 @@ mod invariance;
 mod jet;
 mod normals;
 mod projection;
+mod stream;
 mod surface;

@@ -1,0 +1,124 @@
+//! Streaming evaluation: results bitwise independent of the chunk size and of the thread
+//! count, for the paper's curvature, the projection and the jet.
+
+use mls_core::{JetConfig, MlsConfig, MlsSurface, Parallelism, Point, Vector};
+use mls_shapes::Torus;
+
+const CLOUD_SEED: u64 = 23;
+const QUERY_SEED: u64 = 29;
+
+/// 4,000 samples at random parameters of a torus (uneven density), and 17,002 queries: the
+/// samples, points off the surface by up to ±0.1 (a twentieth of the tube radius), one
+/// non-finite and one far outside the cloud. More queries than the largest chunk tried, so
+/// that every chunk size cuts the Morton clusters of a whole-set call differently.
+fn torus_cloud() -> (MlsSurface, Vec<Point>) {
+    let torus = Torus::new(6.0, 2.0);
+    let samples = mls_shapes::random(&torus, 4_000, CLOUD_SEED);
+    let points: Vec<Point> = samples.iter().map(|s| s.surface.point).collect();
+    let normals: Vec<Vector> = samples.iter().map(|s| s.surface.normal).collect();
+    let surface = MlsSurface::new(&points, &normals, MlsConfig::new(0.7)).unwrap();
+    let mut queries = points;
+    let off = mls_shapes::random(&torus, 13_000, QUERY_SEED);
+    queries.extend(off.iter().enumerate().map(|(k, s)| {
+        let t = 0.1 * ((k % 21) as f64 / 10.0 - 1.0);
+        s.surface.point + s.surface.normal * t
+    }));
+    queries.push(Point::new(f64::NAN, 0.0, 0.0));
+    queries.push(Point::new(100.0, 0.0, 0.0));
+    (surface, queries)
+}
+
+/// Collects a stream's chunks, checking that they arrive in order and cover every query.
+fn collect<R: Clone>(
+    n: usize,
+    stream: impl FnOnce(&mut dyn FnMut(std::ops::Range<usize>, &[R])),
+) -> Vec<R> {
+    let mut out = Vec::with_capacity(n);
+    stream(&mut |range, chunk| {
+        assert_eq!(range.start, out.len());
+        assert_eq!(range.len(), chunk.len());
+        out.extend_from_slice(chunk);
+    });
+    assert_eq!(out.len(), n);
+    out
+}
+
+/// Runs `f` in a rayon pool of `threads` threads.
+fn with_threads<T: Send>(threads: usize, f: impl FnOnce() -> T + Send) -> T {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .unwrap()
+        .install(f)
+}
+
+/// Asserts that two result lists are bitwise equal: `{:?}` prints an f64 as the shortest
+/// decimal that reads back to the same bits (and tells −0 from 0), which `==` does not.
+fn assert_bitwise<R: std::fmt::Debug>(a: &[R], b: &[R], what: &str) {
+    assert_eq!(a.len(), b.len(), "{what}");
+    for (i, (a, b)) in a.iter().zip(b).enumerate() {
+        assert_eq!(format!("{a:?}"), format!("{b:?}"), "{what}: query {i}");
+    }
+}
+
+type Run = (
+    Vec<mls_core::PointResult>,
+    Vec<mls_core::PointResult>,
+    Vec<Result<mls_core::JetPoint, mls_core::PointStatus>>,
+);
+
+fn assert_same_run(a: &Run, b: &Run, what: &str) {
+    assert_bitwise(&a.0, &b.0, &format!("curvature, {what}"));
+    assert_bitwise(&a.1, &b.1, &format!("projection, {what}"));
+    assert_bitwise(&a.2, &b.2, &format!("jet, {what}"));
+}
+
+#[test]
+fn stream_results_do_not_depend_on_chunk_size_or_threads() {
+    let (surface, queries) = torus_cloud();
+    let n = queries.len();
+    let jet = JetConfig::default();
+    let par = Parallelism::Rayon;
+    // The projection costs ten times the others: it runs on every fourth query, in chunks a
+    // quarter as large.
+    let few: Vec<Point> = queries.iter().step_by(4).copied().collect();
+    let run = |chunk: usize, par: Parallelism| -> Run {
+        (
+            collect(n, |sink| {
+                surface.curvature_stream(&queries, par, chunk, sink)
+            }),
+            collect(few.len(), |sink| {
+                surface.projection_stream(&few, par, chunk.div_ceil(4), sink)
+            }),
+            collect(n, |sink| {
+                surface.jet_stream(&queries, &jet, par, chunk, sink)
+            }),
+        )
+    };
+    let reference = with_threads(2, || run(n, par));
+    let ok = reference.0.iter().filter(|r| r.is_ok()).count();
+    assert!(ok > n * 9 / 10, "{ok} of {n} curvatures");
+    // The whole-set calls give the stream's bits.
+    assert_bitwise(
+        &reference.0,
+        &surface.curvature_at_points(&queries, par),
+        "curvature_at_points",
+    );
+    assert_bitwise(
+        &reference.1,
+        &surface.project_points(&few, par),
+        "project_points",
+    );
+    for chunk in [1_000, 7_000, 16_384] {
+        let other = with_threads(2, || run(chunk, par));
+        assert_same_run(&reference, &other, &format!("chunk {chunk}"));
+    }
+    for threads in [1, 3] {
+        let other = with_threads(threads, || run(7_000, par));
+        assert_same_run(&reference, &other, &format!("{threads} threads"));
+    }
+    let sequential = collect(n, |sink| {
+        surface.curvature_stream(&queries, Parallelism::Sequential, 1_000, sink)
+    });
+    assert_bitwise(&reference.0, &sequential, "curvature, sequential");
+}
