@@ -334,6 +334,7 @@ pub fn normals(a: NormalsArgs) -> Result<()> {
         );
         carried.check(output.format(), &a.input)?;
         let points = pipeline::to_points(&cloud);
+        let viewpoints = pipeline::scan_viewpoints(&cloud);
         let name = pipeline::input_name(&a.input);
         let scale = t.time("spacing", || {
             pipeline::choose_h(&points, a.scale.h, a.scale.h_factor, par, &name)
@@ -345,6 +346,7 @@ pub fn normals(a: NormalsArgs) -> Result<()> {
                 &points,
                 mls_cli::NormalsMode::Estimate,
                 a.orient,
+                viewpoints.as_deref(),
                 scale.h,
                 par,
                 &name,

@@ -90,6 +90,23 @@ fn info_report(a: &InfoArgs, out: &mut String) -> Result<()> {
             println!("normals         present, {zero} zero or invalid; {verdict}");
         }
     }
+    if let Some(scans) = &cloud.scans {
+        let posed = scans.origins.iter().filter(|o| o.is_some()).count();
+        let default = if posed == scans.origins.len() {
+            "estimated normals face each point's own scanner by default"
+        } else {
+            "not every scan has a pose: estimated normals are oriented outward (mst) by default"
+        };
+        println!(
+            "scans           {} ({posed} with a pose); {default}",
+            scans.origins.len()
+        );
+        for (s, origin) in scans.origins.iter().enumerate() {
+            if let Some([x, y, z]) = origin {
+                println!("  scan {s:<9} scanner at ({x:.6}, {y:.6}, {z:.6})");
+            }
+        }
+    }
     if !cloud.attributes.is_empty() {
         let list: Vec<String> = cloud
             .attributes

@@ -62,6 +62,8 @@ pub enum Format {
     Las,
     /// LASzip-compressed LAS.
     Laz,
+    /// ASTM E57, every scan (input only; estimated normals face each scan's scanner).
+    E57,
 }
 
 impl From<Format> for mls_io::FileFormat {
@@ -72,6 +74,7 @@ impl From<Format> for mls_io::FileFormat {
             Format::Csv => Self::Csv,
             Format::Las => Self::Las,
             Format::Laz => Self::Laz,
+            Format::E57 => Self::E57,
         }
     }
 }
@@ -88,8 +91,9 @@ pub struct SurfaceOptions {
     pub cutoff: Cutoff,
     /// Where normals come from.
     pub normals: NormalsMode,
-    /// The orientation of estimated normals.
-    pub orient: Orientation,
+    /// The orientation of estimated normals; `None` for the default: towards each point's own
+    /// scanner for an E57 input whose scans all have a pose, else outward (`mst`).
+    pub orient: Option<Orientation>,
 }
 
 /// The options of `mlscurv curvature` that shape the result.

@@ -93,8 +93,10 @@ struct SurfaceArgs {
     /// Orientation of estimated normals: `mst` (outward, by minimum spanning tree),
     /// `viewpoint:X,Y,Z` (towards a scanner position), `up` (positive z, for airborne scans),
     /// or `none`. `viewpoint` and `up` decide each smooth patch by a vote of its points.
-    #[arg(long, value_parser = parse_orient, default_value = "mst")]
-    orient: mls_core::normals::Orientation,
+    /// Default: towards each point's own scanner (its scan's pose) for an E57 input whose
+    /// scans all have a pose, by the same vote; else `mst`.
+    #[arg(long, value_parser = parse_orient)]
+    orient: Option<mls_core::normals::Orientation>,
     #[arg(long, value_parser = mls_io::ColumnNames::parse, help = COLUMNS_HELP)]
     columns: Option<mls_io::ColumnNames>,
     #[command(flatten)]
@@ -157,7 +159,7 @@ struct FormatArgs {
 
 #[derive(Debug, Args)]
 struct CurvatureArgs {
-    /// Input point cloud: .ply, .xyz/.txt/.pts, .csv with a header, or .las/.laz; `-` for
+    /// Input point cloud: .ply, .xyz/.txt/.pts, .csv with a header, .las/.laz, or .e57 (every scan); `-` for
     /// standard input.
     input: PathBuf,
     #[command(flatten)]
@@ -219,9 +221,10 @@ struct NormalsArgs {
     out: OutputArgs,
     #[command(flatten)]
     scale: ScaleArgs,
-    /// Orientation: `mst`, `viewpoint:X,Y,Z`, `up`, or `none`.
-    #[arg(long, value_parser = parse_orient, default_value = "mst")]
-    orient: mls_core::normals::Orientation,
+    /// Orientation: `mst`, `viewpoint:X,Y,Z`, `up`, or `none`. Default: towards each
+    /// point's own scanner for an E57 input whose scans all have a pose, else `mst`.
+    #[arg(long, value_parser = parse_orient)]
+    orient: Option<mls_core::normals::Orientation>,
     #[arg(long, value_parser = mls_io::ColumnNames::parse, help = COLUMNS_HELP)]
     columns: Option<mls_io::ColumnNames>,
     #[command(flatten)]

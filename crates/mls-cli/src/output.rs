@@ -106,6 +106,16 @@ pub fn check_output(
     stdout_default: Option<FileFormat>,
 ) -> Result<Output> {
     let format = format.map(FileFormat::from);
+    if format == Some(FileFormat::E57) || FileFormat::from_path(path) == Some(FileFormat::E57) {
+        bail!(
+            "{}: E57 is an input format only; write .ply, .csv, .xyz, .las or .laz",
+            if is_stdio(path) {
+                STDOUT_NAME.to_owned()
+            } else {
+                path.display().to_string()
+            }
+        );
+    }
     if is_stdio(path) {
         let format = format.or(stdout_default).unwrap_or(FileFormat::Csv);
         if format == FileFormat::Ply && !ascii && std::io::stdout().is_terminal() {

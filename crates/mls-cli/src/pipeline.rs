@@ -7,7 +7,7 @@ use std::time::Instant;
 use anyhow::{Context, Result, anyhow, bail};
 use mls_core::normals::{
     DEFAULT_NEIGHBOURS, DEFAULT_SPACING_NEIGHBOURS, NormalsConfig, Orientation, SpacingStats,
-    estimate_normals, spacing_statistics, suggest_h,
+    estimate_normals, orient_normals_towards, spacing_statistics, suggest_h,
 };
 use mls_core::{
     AdaptiveSurface, ConfigError, Cutoff, MlsConfig, MlsSurface, Parallelism, Point, PointStatus,
@@ -83,6 +83,7 @@ pub fn format_name(format: FileFormat) -> &'static str {
         FileFormat::Csv => "csv",
         FileFormat::Las => "las",
         FileFormat::Laz => "laz",
+        FileFormat::E57 => "e57",
     }
 }
 
@@ -136,7 +137,7 @@ pub fn read_outcome(
             Some(format) => mls_io::read_point_cloud_as_with(path, format.into(), &options)?,
             None => mls_io::read_point_cloud_with(path, &options).map_err(|e| match e {
                 ReadError::NoExtension { .. } | ReadError::UnknownExtension { .. } => {
-                    anyhow!("{e}; or name the format with --input-format ply|xyz|csv|las|laz")
+                    anyhow!("{e}; or name the format with --input-format ply|xyz|csv|las|laz|e57")
                 }
                 e => e.into(),
             })?,
@@ -144,7 +145,7 @@ pub fn read_outcome(
     })
 }
 
-/// The format of data without a file name: PLY or LAS/LAZ by its magic word, else CSV if the first line
+/// The format of data without a file name: PLY, LAS/LAZ or E57 by its magic word, else CSV if the first line
 /// that is not blank or a `#` comment has a comma (its header row), else XYZ.
 fn sniff(bytes: &[u8]) -> FileFormat {
     if bytes.starts_with(b"ply") {
@@ -153,6 +154,9 @@ fn sniff(bytes: &[u8]) -> FileFormat {
     // LAS and LAZ alike: the reader takes the compression from the header.
     if bytes.starts_with(b"LASF") {
         return FileFormat::Las;
+    }
+    if bytes.starts_with(b"ASTM-E57") {
+        return FileFormat::E57;
     }
     let first = bytes
         .split(|&b| b == b'\n')
@@ -369,13 +373,24 @@ pub struct Normals {
     pub from_file: bool,
 }
 
+/// The scanner position of each point of an E57 input whose scans all have a pose, for the
+/// default orientation ([`normals`]); `None` for other inputs.
+pub fn scan_viewpoints(cloud: &PointCloud) -> Option<Vec<Point>> {
+    let viewpoints = cloud.scans.as_ref()?.viewpoints()?;
+    Some(viewpoints.into_iter().map(Point::from).collect())
+}
+
 /// Normals from `file_normals` (the file's, consumed here so that they are not held beside
-/// the converted ones) or estimated from `points`, as `mode` says.
+/// the converted ones) or estimated from `points`, as `mode` says, and oriented as
+/// `orientation` says; without one (the default), towards `viewpoints` (one per point: each
+/// point's own scanner, [`scan_viewpoints`]) if given, else outward.
+#[allow(clippy::too_many_arguments)]
 pub fn normals(
     file_normals: Option<Vec<[f64; 3]>>,
     points: &[Point],
     mode: NormalsMode,
-    orientation: Orientation,
+    orientation: Option<Orientation>,
+    viewpoints: Option<&[Point]>,
     h: f64,
     par: Parallelism,
     file: &str,
@@ -408,15 +423,33 @@ pub fn normals(
             from_file: true,
         });
     }
+    // Per-scan viewpoints: estimated unoriented, then oriented by the per-point vote.
+    let per_scan = match (orientation, viewpoints) {
+        (None, Some(v)) => Some(v),
+        _ => None,
+    };
+    let orientation = orientation.unwrap_or_default();
     let config = NormalsConfig {
         k: DEFAULT_NEIGHBOURS,
         h: Some(h),
-        orientation,
+        orientation: if per_scan.is_some() {
+            Orientation::None
+        } else {
+            orientation
+        },
         ..NormalsConfig::default()
     };
-    let est = estimate_normals(points, &config, par)
+    let mut est = estimate_normals(points, &config, par)
         .with_context(|| format!("{file}: normal estimation"))?;
+    if let Some(viewpoints) = per_scan {
+        est.report =
+            orient_normals_towards(points, &est.graph, &mut est.estimates, viewpoints, par)
+                .with_context(|| format!("{file}: normal orientation"))?;
+    }
     let orient = match orientation {
+        _ if per_scan.is_some() => "oriented towards each scan's scanner position (E57 pose) by \
+            minimum spanning tree and a vote per smooth patch"
+            .to_string(),
         Orientation::Outward => "oriented outward by minimum spanning tree".to_string(),
         Orientation::Viewpoint(v) => format!(
             "oriented towards the viewpoint ({}, {}, {}) by minimum spanning tree and a vote per smooth patch",
@@ -431,6 +464,7 @@ pub fn normals(
     let mut checks = Vec::new();
     if let Some(f) = r.facing {
         let towards = match orientation {
+            _ if per_scan.is_some() => "face their scanner",
             Orientation::Up => "point up",
             _ => "face the viewpoint",
         };
@@ -528,17 +562,21 @@ pub fn prepare<S>(
     t: &mut Timings,
     build: impl FnOnce(&[Point], &[Vector], f64, Cutoff) -> Result<S, ConfigError>,
 ) -> Result<Prepared<S>> {
+    let cloud = t.time("read", || read(input, format, columns))?;
+    let viewpoints = scan_viewpoints(&cloud);
     let PointCloud {
         points,
         normals: file_normals,
         attributes,
         las,
-    } = t.time("read", || read(input, format, columns))?;
+        scans: _,
+    } = cloud;
     // `[f64; 3]` and `Point` have the same layout: the conversion reuses the buffer.
     let points: Vec<Point> = points.into_iter().map(Point::from).collect();
     let built = build_surface(
         &points,
         file_normals,
+        viewpoints.as_deref(),
         &input_name(input),
         s,
         t,
@@ -554,12 +592,15 @@ pub fn prepare<S>(
 
 /// Chooses h, checks it against the cloud (passing its warnings to `warn` at once), gets
 /// oriented normals (`file_normals`, or estimated, as `s.normals` says) and builds the surface
-/// with `build` (points, normals, h, cutoff), timing each stage. `file` names the cloud in
+/// with `build` (points, normals, h, cutoff), timing each stage. `viewpoints`, one per point,
+/// are the default orientation's ([`normals`]). `file` names the cloud in
 /// messages; `points` must be finite (the readers refuse other values) and at least
 /// [`MIN_POINTS`] ([`check_count`]).
+#[allow(clippy::too_many_arguments)]
 pub fn build_surface<S>(
     points: &[Point],
     file_normals: Option<Vec<[f64; 3]>>,
+    viewpoints: Option<&[Point]>,
     file: &str,
     s: &SurfaceOptions,
     t: &mut Timings,
@@ -581,6 +622,7 @@ pub fn build_surface<S>(
             points,
             s.normals,
             s.orient,
+            viewpoints,
             scale.h,
             par,
             file,

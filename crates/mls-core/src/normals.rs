@@ -28,7 +28,10 @@ pub use estimate::{
     DEFAULT_DEGENERACY_TOLERANCE, NormalEstimate, estimate_unoriented, normal_from_neighbourhood,
 };
 pub use graph::NeighbourGraph;
-pub use orient::{Facing, Orientation, OrientationReport, orient_normals, orientation_consistency};
+pub use orient::{
+    Facing, Orientation, OrientationReport, orient_normals, orient_normals_towards,
+    orientation_consistency,
+};
 pub use spacing::{
     DEFAULT_H_FACTOR, DEFAULT_SPACING_NEIGHBOURS, DistanceStats, SpacingStats, spacing_statistics,
     square_grid_rms_distance, suggest_h,

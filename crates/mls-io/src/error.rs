@@ -24,21 +24,21 @@ pub enum ReadError {
     },
     /// The path names a directory, not a file.
     #[error(
-        "{file}: is a directory; expected a point-cloud file (.ply, .xyz, .txt, .pts, .csv, .las or .laz)"
+        "{file}: is a directory; expected a point-cloud file (.ply, .xyz, .txt, .pts, .csv, .las, .laz or .e57)"
     )]
     IsADirectory {
         /// The path.
         file: String,
     },
     /// The file name has no extension, so its format is unknown.
-    #[error("{file}: no file extension; expected .ply, .xyz, .txt, .pts, .csv, .las or .laz")]
+    #[error("{file}: no file extension; expected .ply, .xyz, .txt, .pts, .csv, .las, .laz or .e57")]
     NoExtension {
         /// The file.
         file: String,
     },
     /// The file name has an extension that names no supported format.
     #[error(
-        "{file}: unknown extension \".{extension}\"; expected .ply, .xyz, .txt, .pts, .csv, .las or .laz"
+        "{file}: unknown extension \".{extension}\"; expected .ply, .xyz, .txt, .pts, .csv, .las, .laz or .e57"
     )]
     UnknownExtension {
         /// The file.
@@ -107,8 +107,8 @@ pub enum ReadError {
     },
     /// Column names were given for a PLY or LAS/LAZ file, whose header names its fields.
     #[error(
-        "{file}: --columns applies to text files (.xyz, .txt, .pts, .csv); a PLY or LAS header \
-         names its fields"
+        "{file}: --columns applies to text files (.xyz, .txt, .pts, .csv); a PLY, LAS or E57 \
+         header names its fields"
     )]
     ColumnsForPly {
         /// The file.
@@ -172,6 +172,16 @@ pub enum ReadError {
         /// The file.
         file: String,
         /// What is wrong, e.g. `not a LAS file: …` or `truncated: …`.
+        message: String,
+    },
+    /// An E57 file the `e57` crate cannot read (not E57, truncated, a checksum or XML error),
+    /// with no scans, a scan without Cartesian or spherical coordinates, or a coordinate that
+    /// is not finite. The message names the scan and point where it can.
+    #[error("{file}: {message}")]
+    E57 {
+        /// The file.
+        file: String,
+        /// What is wrong.
         message: String,
     },
 }
@@ -267,6 +277,14 @@ pub enum WriteError {
         column: String,
         /// The row, from 0.
         row: usize,
+    },
+    /// A format this crate reads but does not write (E57).
+    #[error("{file}: {format} is an input format only; write .ply, .csv, .xyz, .las or .laz")]
+    ReadOnlyFormat {
+        /// The destination.
+        file: String,
+        /// The format's name.
+        format: &'static str,
     },
     /// The `las` crate refused the header or a point.
     #[error("{file}: LAS: {message}")]

@@ -1,6 +1,8 @@
 //! Point-cloud readers and writers for mls-curvature: PLY (ASCII and binary, either byte
-//! order), whitespace-separated XYZ/TXT/PTS, CSV with a header, and LAS/LAZ (through the
-//! `las` crate; computed columns as LAS extra bytes on output).
+//! order), whitespace-separated XYZ/TXT/PTS, CSV with a header, LAS/LAZ (through the
+//! `las` crate; computed columns as LAS extra bytes on output), and E57 input (through the
+//! `e57` crate: every scan in world coordinates, with each scan's scanner position in
+//! [`Scans`]).
 //!
 //! Readers return a [`PointCloud`] of points, when the file has all of `nx`, `ny`, `nz`,
 //! normals exactly as stored (not normalised: the caller validates them), and every other
@@ -38,6 +40,7 @@
 
 mod attributes;
 mod columns;
+mod e57;
 mod error;
 mod las;
 mod lines;
@@ -80,6 +83,33 @@ pub struct PointCloud {
     pub attributes: Vec<Attribute>,
     /// The layout of a LAS/LAZ input, for LAS output that keeps it.
     pub las: Option<LasTemplate>,
+    /// The scans of an E57 input: where each was taken from and which points it gave.
+    pub scans: Option<Scans>,
+}
+
+/// The scans a cloud was concatenated from (an E57 file's `data3D` list), for orienting each
+/// point's normal towards its own scanner.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Scans {
+    /// Per scan, in file order: the scanner's position in world coordinates (the translation
+    /// of the scan's pose, the image of its local origin), `None` for a scan without a pose,
+    /// whose local origin may not be where it was scanned from (an export of registered
+    /// data).
+    pub origins: Vec<Option<[f64; 3]>>,
+    /// Per point: the index of its scan in [`origins`](Self::origins).
+    pub scan_of_point: Vec<u32>,
+}
+
+impl Scans {
+    /// Per point, the position of its scanner, when every scan has a pose; `None` otherwise.
+    pub fn viewpoints(&self) -> Option<Vec<[f64; 3]>> {
+        let origins: Option<Vec<[f64; 3]>> = self.origins.iter().copied().collect();
+        let origins = origins?;
+        self.scan_of_point
+            .iter()
+            .map(|&s| origins.get(s as usize).copied())
+            .collect()
+    }
 }
 
 impl PointCloud {
@@ -138,6 +168,8 @@ pub enum FileFormat {
     Las,
     /// `.laz`: LASzip-compressed LAS. Read as LAS or LAZ, whichever the header says.
     Laz,
+    /// `.e57`: ASTM E2807 E57, every scan (input only).
+    E57,
 }
 
 impl FileFormat {
@@ -149,6 +181,7 @@ impl FileFormat {
             "csv" => Some(Self::Csv),
             "las" => Some(Self::Las),
             "laz" => Some(Self::Laz),
+            "e57" => Some(Self::E57),
             _ => None,
         }
     }
@@ -167,7 +200,7 @@ fn detect_format(path: &Path) -> Result<FileFormat, Option<String>> {
 
 /// Reads a point cloud, choosing the reader by the file's extension (case-insensitive):
 /// `.ply` ([`read_ply`]), `.xyz`, `.txt`, `.pts` ([`read_xyz`]), `.csv` ([`read_csv`]), or
-/// `.las`, `.laz` ([`ReadError::Las`] names what is wrong).
+/// `.las`, `.laz` ([`ReadError::Las`] names what is wrong), or `.e57` ([`ReadError::E57`]).
 /// The readers' notes are dropped; [`read_point_cloud_with`] returns them.
 ///
 /// # Errors
@@ -225,8 +258,10 @@ pub fn read_point_cloud_as_with(
     if path.is_dir() {
         return Err(ReadError::IsADirectory { file });
     }
-    if matches!(format, FileFormat::Ply | FileFormat::Las | FileFormat::Laz)
-        && options.columns.is_some()
+    if matches!(
+        format,
+        FileFormat::Ply | FileFormat::Las | FileFormat::Laz | FileFormat::E57
+    ) && options.columns.is_some()
     {
         return Err(ReadError::ColumnsForPly { file });
     }
@@ -241,6 +276,7 @@ pub fn read_point_cloud_as_with(
         FileFormat::Xyz => read_xyz_with(reader, &file, options),
         FileFormat::Csv => read_csv_with(reader, &file, options),
         FileFormat::Las | FileFormat::Laz => las::read(reader, &file),
+        FileFormat::E57 => e57::read(reader, &file),
     }
 }
 
@@ -279,6 +315,8 @@ pub fn read_point_cloud_normals_as_attributes(
         FileFormat::Xyz => text::read_xyz_slots(reader, &file, options, points),
         FileFormat::Csv => text::read_csv_slots(reader, &file, options, points),
         FileFormat::Las | FileFormat::Laz => las::read(reader, &file),
+        FileFormat::E57 if options.columns.is_some() => Err(ReadError::ColumnsForPly { file }),
+        FileFormat::E57 => e57::read(reader, &file),
     };
     outcome.map(|r| r.cloud)
 }
@@ -309,7 +347,9 @@ pub fn read_point_cloud_from_with(
     options: &ReadOptions,
 ) -> Result<ReadOutcome, ReadError> {
     match format {
-        FileFormat::Ply | FileFormat::Las | FileFormat::Laz if options.columns.is_some() => {
+        FileFormat::Ply | FileFormat::Las | FileFormat::Laz | FileFormat::E57
+            if options.columns.is_some() =>
+        {
             Err(ReadError::ColumnsForPly {
                 file: name.to_owned(),
             })
@@ -318,6 +358,16 @@ pub fn read_point_cloud_from_with(
         FileFormat::Xyz => read_xyz_with(reader, name, options),
         FileFormat::Csv => read_csv_with(reader, name, options),
         FileFormat::Las | FileFormat::Laz => las::read_stream(reader, name),
+        FileFormat::E57 => {
+            // The E57 reader seeks (the XML section is at the end): the stream is read whole.
+            let mut reader = reader;
+            let mut bytes = Vec::new();
+            std::io::Read::read_to_end(&mut reader, &mut bytes).map_err(|error| ReadError::Io {
+                file: name.to_owned(),
+                error,
+            })?;
+            e57::read(std::io::Cursor::new(bytes), name)
+        }
     }
 }
 
@@ -403,6 +453,7 @@ impl CloudBuilder {
             normals: self.normals,
             attributes: self.attributes,
             las: None,
+            scans: None,
         }
     }
 }

@@ -107,7 +107,7 @@ pub(crate) fn curvature<'py>(
             h_factor,
             cutoff: crate::cutoff(cutoff)?,
             normals: NormalsMode::Auto,
-            orient: crate::orient(orient)?,
+            orient: Some(crate::orient(orient)?),
         },
         method: crate::method(method)?,
         at: crate::at(at)?,
@@ -134,6 +134,7 @@ pub(crate) fn curvature<'py>(
                 } = pipeline::build_surface(
                     points,
                     normals,
+                    None,
                     POINTS,
                     &options.surface,
                     &mut t,
@@ -259,7 +260,8 @@ pub(crate) fn normals<'py>(
                         None,
                         points,
                         NormalsMode::Estimate,
-                        orient,
+                        Some(orient),
+                        None,
                         scale.h,
                         par,
                         POINTS,
@@ -340,7 +342,7 @@ pub(crate) fn project<'py>(
         h_factor,
         cutoff: crate::cutoff(cutoff)?,
         normals: NormalsMode::Auto,
-        orient: crate::orient(orient)?,
+        orient: Some(crate::orient(orient)?),
     };
     let threads = crate::threads(threads)?;
     let Input { array, normals } = Input::new(points, normals)?;
@@ -355,6 +357,7 @@ pub(crate) fn project<'py>(
                 let built = pipeline::build_surface(
                     points,
                     normals,
+                    None,
                     POINTS,
                     &options,
                     &mut t,

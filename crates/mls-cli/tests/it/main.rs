@@ -9,6 +9,7 @@ mod chunks;
 mod columns;
 mod common;
 mod curvature_bunny;
+mod e57;
 mod eval;
 mod eval_options;
 mod help_flag;

@@ -156,6 +156,20 @@ pub fn orient_normals(
     {
         return Err(NormalsError::InvalidViewpoint);
     }
+    orient_by_rule(points, graph, estimates, Rule::Fixed(orientation), par)
+}
+
+/// [`orient_normals`] and [`orient_normals_towards`] after their own checks.
+fn orient_by_rule(
+    points: &[Point],
+    graph: &NeighbourGraph,
+    estimates: &mut [Result<NormalEstimate, PointStatus>],
+    rule: Rule<'_>,
+    par: Parallelism,
+) -> Result<OrientationReport, NormalsError> {
+    let n = points.len();
+    check_lengths(n, graph.len(), "graph nodes")?;
+    check_lengths(n, estimates.len(), "normals")?;
     check_points(points)?;
     let k = graph.k();
     // Edges are numbered `i·k + slot` in 32 bits so that a sort key is one u64.
@@ -164,9 +178,9 @@ pub fn orient_normals(
         return Err(NormalsError::GraphTooLarge(edge_ids));
     }
     let oriented = estimates.iter().filter(|e| e.is_ok()).count();
-    let (components, patches, flipped) = match orientation {
-        Orientation::None => (0, 0, 0),
-        _ => orient_along_tree(points, graph, estimates, orientation, par),
+    let (components, patches, flipped) = match rule {
+        Rule::Fixed(Orientation::None) => (0, 0, 0),
+        _ => orient_along_tree(points, graph, estimates, rule, par),
     };
     let consistency = consistency_of(graph, par, |i| {
         estimates
@@ -174,8 +188,8 @@ pub fn orient_normals(
             .and_then(|e| e.as_ref().ok())
             .map(|e| e.normal.into_inner())
     });
-    let facing = orientation.votes().then(|| {
-        facing_of(points, orientation, par, |i| {
+    let facing = rule.votes().then(|| {
+        facing_of(points, rule, par, |i| {
             estimates
                 .get(i)
                 .and_then(|e| e.as_ref().ok())
@@ -190,6 +204,63 @@ pub fn orient_normals(
         consistency,
         facing,
     })
+}
+
+/// Orients normals as [`orient_normals`] does for [`Orientation::Viewpoint`], with a viewpoint
+/// per point: `viewpoints[i]` is the position of the scanner that measured point `i` (the
+/// scans of an E57 file, each from its own pose). The same patches and the same vote, each
+/// point voting with the cosine between its normal and its own line of sight
+/// `(v_i − p_i)/|v_i − p_i|`:
+///
+/// $$ \sum_{i \in \text{patch}} \mathbf n_i \cdot
+///    \frac{\mathbf v_i - \mathbf p_i}{|\mathbf v_i - \mathbf p_i|} < 0
+///    \implies \text{flip the patch}. $$
+///
+/// A surface seen from several scanners is seen from the same side by all of them, so the
+/// points of different scans in one patch agree. [`OrientationReport::facing`] counts the
+/// normals facing their own scanner.
+///
+/// # Errors
+/// Those of [`orient_normals`]; [`NormalsError::LengthMismatch`] when `viewpoints` does not
+/// have one entry per point, and [`NormalsError::InvalidViewpoint`] for a non-finite one.
+pub fn orient_normals_towards(
+    points: &[Point],
+    graph: &NeighbourGraph,
+    estimates: &mut [Result<NormalEstimate, PointStatus>],
+    viewpoints: &[Point],
+    par: Parallelism,
+) -> Result<OrientationReport, NormalsError> {
+    check_lengths(points.len(), viewpoints.len(), "viewpoints")?;
+    if !viewpoints.iter().all(|v| v.iter().all(|c| c.is_finite())) {
+        return Err(NormalsError::InvalidViewpoint);
+    }
+    orient_by_rule(points, graph, estimates, Rule::PerPoint(viewpoints), par)
+}
+
+/// The sign rule of the tree traversal: one [`Orientation`] for all points, or a viewpoint per
+/// point ([`orient_normals_towards`]).
+#[derive(Clone, Copy)]
+enum Rule<'a> {
+    Fixed(Orientation),
+    PerPoint(&'a [Point]),
+}
+
+impl Rule<'_> {
+    /// The unit direction the normal of point `i` at `p` should face, for the voting rules.
+    fn line_of_sight(&self, i: usize, p: &Point) -> Option<Vector> {
+        match self {
+            Self::Fixed(o) => o.line_of_sight(p),
+            Self::PerPoint(v) => Orientation::Viewpoint(*v.get(i)?).line_of_sight(p),
+        }
+    }
+
+    /// Whether this rule decides patches by the vote of [`line_of_sight`](Self::line_of_sight).
+    fn votes(&self) -> bool {
+        match self {
+            Self::Fixed(o) => o.votes(),
+            Self::PerPoint(_) => true,
+        }
+    }
 }
 
 /// The fraction of graph edges whose normals agree in sign, `n_i · n_j > 0`.
@@ -260,15 +331,15 @@ where
     (all > 0).then(|| agree as f64 / all as f64)
 }
 
-/// How many of the normals face their line of sight under `orientation` (a voting rule).
-fn facing_of<F>(points: &[Point], orientation: Orientation, par: Parallelism, normal: F) -> Facing
+/// How many of the normals face their line of sight under `rule` (a voting rule).
+fn facing_of<F>(points: &[Point], rule: Rule<'_>, par: Parallelism, normal: F) -> Facing
 where
     F: Fn(usize) -> Option<Vector> + Sync,
 {
     let count = |i: usize| -> [usize; 4] {
         let (Some(n), Some(u)) = (
             normal(i),
-            points.get(i).and_then(|p| orientation.line_of_sight(p)),
+            points.get(i).and_then(|p| rule.line_of_sight(i, p)),
         ) else {
             return [0; 4];
         };
@@ -304,7 +375,7 @@ fn orient_along_tree(
     points: &[Point],
     graph: &NeighbourGraph,
     estimates: &mut [Result<NormalEstimate, PointStatus>],
-    orientation: Orientation,
+    rule: Rule<'_>,
     par: Parallelism,
 ) -> (usize, usize, usize) {
     let n = points.len();
@@ -373,10 +444,10 @@ fn orient_along_tree(
         cursor[b as usize] += 1;
     }
 
-    let seeds = choose_seeds(points, est, &mut sets, orientation);
+    let seeds = choose_seeds(points, est, &mut sets, rule);
     let components = seeds.len();
 
-    let votes = orientation.votes();
+    let votes = rule.votes();
     // Tree edges across which the sign is carried inside a patch: all of them for the outward
     // rule, only those between nearly parallel normals for the voting rules.
     let crease = if votes {
@@ -443,7 +514,7 @@ fn orient_along_tree(
                     stack.push(w as u32);
                 }
             }
-            if votes && patch_vote(points, estimates, &members, orientation) < 0.0 {
+            if votes && patch_vote(points, estimates, &members, rule) < 0.0 {
                 for &i in &members {
                     flip(&mut estimates[i as usize]);
                 }
@@ -475,14 +546,14 @@ fn patch_vote(
     points: &[Point],
     estimates: &[Result<NormalEstimate, PointStatus>],
     members: &[u32],
-    orientation: Orientation,
+    rule: Rule<'_>,
 ) -> f64 {
     members
         .iter()
         .map(|&i| i as usize)
         .filter_map(|i| {
             let n = estimates.get(i)?.as_ref().ok()?.normal.into_inner();
-            Some(n.dot(&orientation.line_of_sight(points.get(i)?)?))
+            Some(n.dot(&rule.line_of_sight(i, points.get(i)?)?))
         })
         .sum()
 }
@@ -540,7 +611,7 @@ fn choose_seeds(
     points: &[Point],
     estimates: &[Result<NormalEstimate, PointStatus>],
     sets: &mut DisjointSets,
-    orientation: Orientation,
+    rule: Rule<'_>,
 ) -> Vec<(usize, bool)> {
     /// Relative size of the largest normal-line offset below which a component counts as
     /// flat (no outside).
@@ -583,15 +654,14 @@ fn choose_seeds(
     for &(i, c) in &member {
         let Ok(e) = &estimates[i] else { continue };
         let comp = &mut components[c];
-        let score = match orientation {
+        let score = if rule.votes() {
             // The vote decides the sign, so any seed will do: the most confident one.
-            Orientation::Viewpoint(_) | Orientation::Up => e.confidence(),
-            _ => {
-                let centroid = comp.sum / comp.count as f64;
-                let r = points[i].coords - origin - centroid;
-                comp.extent = comp.extent.max(r.norm());
-                e.normal.as_vector().dot(&r).abs() * e.confidence()
-            }
+            e.confidence()
+        } else {
+            let centroid = comp.sum / comp.count as f64;
+            let r = points[i].coords - origin - centroid;
+            comp.extent = comp.extent.max(r.norm());
+            e.normal.as_vector().dot(&r).abs() * e.confidence()
         };
         // Strictly greater keeps the lowest index among ties.
         if score > comp.score {
@@ -608,14 +678,14 @@ fn choose_seeds(
                 .as_ref()
                 .map(|e| e.normal.into_inner())
                 .unwrap_or_else(|_| Vector::zeros());
-            let wanted = match orientation {
+            if rule.votes() {
                 // Decided by the vote after the traversal.
-                Orientation::Viewpoint(_) | Orientation::Up => return (i, false),
-                _ if comp.score <= FLAT * comp.extent => {
-                    let axis = n.iamax();
-                    Vector::ith(axis, 1.0)
-                }
-                _ => points[i].coords - origin - comp.sum / comp.count as f64,
+                return (i, false);
+            }
+            let wanted = if comp.score <= FLAT * comp.extent {
+                Vector::ith(n.iamax(), 1.0)
+            } else {
+                points[i].coords - origin - comp.sum / comp.count as f64
             };
             (i, n.dot(&wanted) < 0.0)
         })

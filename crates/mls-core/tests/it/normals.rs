@@ -5,8 +5,8 @@ use std::f64::consts::{PI, TAU};
 use mls_core::normals::{
     DEFAULT_H_FACTOR, DEFAULT_SPACING_NEIGHBOURS, NeighbourGraph, NormalEstimate, NormalsConfig,
     NormalsError, Orientation, estimate_normals, estimate_unoriented, normal_from_neighbourhood,
-    orient_normals, orientation_consistency, spacing_statistics, square_grid_rms_distance,
-    suggest_h,
+    orient_normals, orient_normals_towards, orientation_consistency, spacing_statistics,
+    square_grid_rms_distance, suggest_h,
 };
 use mls_core::{Matrix, Parallelism, Point, PointStatus, Vector};
 use nalgebra::{Rotation3, SymmetricEigen};
@@ -235,6 +235,46 @@ fn viewpoint_orients_a_plane_towards_the_viewer() {
         unwrap_normals(&out.estimates)
             .iter()
             .all(|n| n.z < -0.999_999)
+    );
+}
+
+#[test]
+fn per_point_viewpoints_orient_each_scan_towards_its_own_scanner() {
+    // Two patches of the plane z = 0, ten apart: the first scanned from above, the second
+    // from below. No single viewpoint gives both signs; one per point does.
+    let first = square_grid(40, 40, 0.05);
+    let second: Vec<Point> = first
+        .iter()
+        .map(|p| p + Vector::new(10.0, 0.0, 0.0))
+        .collect();
+    let points: Vec<Point> = first.iter().chain(&second).copied().collect();
+    let (above, below) = (Point::new(0.3, 0.0, 10.0), Point::new(10.0, -0.2, -10.0));
+    let viewpoints: Vec<Point> = (0..points.len())
+        .map(|i| if i < first.len() { above } else { below })
+        .collect();
+    let graph = NeighbourGraph::build(&points, 16, PAR).unwrap();
+    let mut est = estimate_normals(&points, &unoriented(16), PAR)
+        .unwrap()
+        .estimates;
+    flip_randomly(&mut est, FLIP_SEED);
+    let report = orient_normals_towards(&points, &graph, &mut est, &viewpoints, PAR).unwrap();
+    assert_eq!(report.components, 2);
+    let facing = report.facing.unwrap();
+    assert_eq!(facing.facing, points.len());
+    for (i, n) in unwrap_normals(&est).iter().enumerate() {
+        let sign = if i < first.len() { 1.0 } else { -1.0 };
+        assert!(n.z * sign > 1.0 - 1e-12, "normal {n} at point {i}");
+    }
+    // One viewpoint per point, each finite.
+    assert!(matches!(
+        orient_normals_towards(&points, &graph, &mut est, &viewpoints[1..], PAR),
+        Err(NormalsError::LengthMismatch { .. })
+    ));
+    let mut bad = viewpoints.clone();
+    bad[7] = Point::new(0.0, f64::INFINITY, 0.0);
+    assert_eq!(
+        orient_normals_towards(&points, &graph, &mut est, &bad, PAR),
+        Err(NormalsError::InvalidViewpoint)
     );
 }
 

@@ -174,6 +174,7 @@ where
             normals,
             attributes,
             las: Some(template),
+            scans: None,
         },
         notes,
     })

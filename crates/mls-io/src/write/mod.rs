@@ -228,6 +228,10 @@ pub fn write_point_cloud_as_with(
                 crate::las::write_file(out, &file, columns, compressed, options.las)
             })
         }
+        FileFormat::E57 => Err(WriteError::ReadOnlyFormat {
+            file: path.display().to_string(),
+            format: "E57",
+        }),
     }
 }
 
@@ -268,6 +272,10 @@ pub fn write_point_cloud_to_with(
         FileFormat::Xyz => write_xyz_to(writer, name, columns),
         FileFormat::Las => crate::las::write_stream(writer, name, columns, false, options.las),
         FileFormat::Laz => crate::las::write_stream(writer, name, columns, true, options.las),
+        FileFormat::E57 => Err(WriteError::ReadOnlyFormat {
+            file: name.to_owned(),
+            format: "E57",
+        }),
     }
 }
 

@@ -2,6 +2,7 @@
 
 mod atomic;
 mod attributes;
+mod e57;
 mod fuzz;
 mod las;
 mod malformed;
