@@ -153,29 +153,7 @@ pub fn check_output(
             }
         ),
     };
-    let dir = match path.parent() {
-        Some(parent) if !parent.as_os_str().is_empty() => parent,
-        _ => Path::new("."),
-    };
-    match std::fs::metadata(dir) {
-        Ok(meta) if meta.is_dir() => {}
-        Ok(_) => bail!("{name}: {} is not a directory", dir.display()),
-        Err(e) => bail!("{name}: directory {}: {e}", dir.display()),
-    }
-    if let Some(meta) = existing {
-        // `readonly` is the mode alone (root could write anyway); opening for writing, without
-        // truncating, asks the operating system whether this user may write to the file.
-        let denied = meta.permissions().readonly()
-            || std::fs::OpenOptions::new()
-                .write(true)
-                .open(path)
-                .is_err_and(|e| e.kind() == std::io::ErrorKind::PermissionDenied);
-        if denied && !force {
-            bail!(
-                "{name}: the file is read-only; refusing to replace it (add --force to replace it, keeping its permissions)"
-            );
-        }
-    }
+    check_replaceable(path, existing.as_ref(), force)?;
     Ok(Output::File(path.to_path_buf(), format))
 }
 
@@ -244,4 +222,38 @@ impl Carried {
         columns.splice(at..at, self.attributes.iter().map(Column::attribute));
         columns
     }
+}
+
+/// Checks a file output path whose directory must exist: that directory exists, and an
+/// `existing` file is replaced only when writable or `force` (its permissions are kept).
+pub fn check_replaceable(
+    path: &Path,
+    existing: Option<&std::fs::Metadata>,
+    force: bool,
+) -> Result<()> {
+    let name = path.display();
+    let dir = match path.parent() {
+        Some(parent) if !parent.as_os_str().is_empty() => parent,
+        _ => Path::new("."),
+    };
+    match std::fs::metadata(dir) {
+        Ok(meta) if meta.is_dir() => {}
+        Ok(_) => bail!("{name}: {} is not a directory", dir.display()),
+        Err(e) => bail!("{name}: directory {}: {e}", dir.display()),
+    }
+    if let Some(meta) = existing {
+        // `readonly` is the mode alone (root could write anyway); opening for writing, without
+        // truncating, asks the operating system whether this user may write to the file.
+        let denied = meta.permissions().readonly()
+            || std::fs::OpenOptions::new()
+                .write(true)
+                .open(path)
+                .is_err_and(|e| e.kind() == std::io::ErrorKind::PermissionDenied);
+        if denied && !force {
+            bail!(
+                "{name}: the file is read-only; refusing to replace it (add --force to replace it, keeping its permissions)"
+            );
+        }
+    }
+    Ok(())
 }

@@ -333,26 +333,5 @@ fn check_output(input: &Path, output: &Path, force: bool) -> Result<()> {
     if existing.as_ref().is_some_and(std::fs::Metadata::is_dir) {
         bail!("{name}: is a directory; expected an output file name");
     }
-    let dir = match output.parent() {
-        Some(parent) if !parent.as_os_str().is_empty() => parent,
-        _ => Path::new("."),
-    };
-    match std::fs::metadata(dir) {
-        Ok(meta) if meta.is_dir() => {}
-        Ok(_) => bail!("{name}: {} is not a directory", dir.display()),
-        Err(e) => bail!("{name}: directory {}: {e}", dir.display()),
-    }
-    if let Some(meta) = existing {
-        let denied = meta.permissions().readonly()
-            || std::fs::OpenOptions::new()
-                .write(true)
-                .open(output)
-                .is_err_and(|e| e.kind() == std::io::ErrorKind::PermissionDenied);
-        if denied && !force {
-            bail!(
-                "{name}: the file is read-only; refusing to replace it (add --force to replace it, keeping its permissions)"
-            );
-        }
-    }
-    Ok(())
+    mls_cli::output::check_replaceable(output, existing.as_ref(), force)
 }
