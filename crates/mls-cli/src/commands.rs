@@ -36,6 +36,11 @@ pub fn curvature(a: CurvatureArgs) -> Result<()> {
         at: a.at,
         adaptive: a.adaptive,
     };
+    if let Some(budget) = tiled_budget(&a, &output)? {
+        return pipeline::with_threads(s.run.threads, || {
+            curvature_tiled(&a, &options, &output, budget)
+        });
+    }
     pipeline::with_threads(s.run.threads, || {
         let mut t = Timings::new(interactive(s.run.quiet));
         let Prepared {
@@ -131,6 +136,115 @@ pub fn curvature(a: CurvatureArgs) -> Result<()> {
         }
         Ok(())
     })
+}
+
+/// The memory budget of a tiled run, if the input needs one: a LAS/LAZ file whose points do
+/// not fit in `--memory` (default: the available memory less a fifth).
+fn tiled_budget(a: &CurvatureArgs, output: &pipeline::Output) -> Result<Option<u64>> {
+    use mls_io::FileFormat;
+    let name = pipeline::input_name(&a.input);
+    let format = a
+        .out
+        .formats
+        .input_format
+        .map(FileFormat::from)
+        .or_else(|| FileFormat::from_path(&a.input));
+    let las =
+        matches!(format, Some(FileFormat::Las | FileFormat::Laz)) && name != pipeline::STDIN_NAME;
+    if !las {
+        if let Some(budget) = a.memory {
+            // Other formats are read whole; say so only when they would not fit.
+            let size = std::fs::metadata(&a.input).map_or(0, |m| m.len());
+            if size > budget {
+                anyhow::bail!(
+                    "{name}: --memory {} MiB: only LAS and LAZ inputs are evaluated in tiles;                      this file is read whole (convert it to LAZ, e.g. with PDAL)",
+                    budget >> 20
+                );
+            }
+        }
+        return Ok(None);
+    }
+    let points = mls_io::LasReader::open(&a.input)?.len();
+    let (budget, given) = match a.memory {
+        Some(b) => (b, true),
+        None => match mls_cli::tiled::available_memory() {
+            Some(m) => (m / 5 * 4, false),
+            None => return Ok(None),
+        },
+    };
+    if mls_cli::tiled::fits_in_memory(points, budget) {
+        return Ok(None);
+    }
+    if !matches!(output.format(), FileFormat::Las | FileFormat::Laz)
+        || matches!(output, pipeline::Output::Stdout(_))
+    {
+        anyhow::bail!(
+            "{name}: {points} points do not fit in {} MiB of memory and are evaluated in              tiles, whose output must be a .las or .laz file",
+            budget >> 20
+        );
+    }
+    if !given && !a.surface.run.quiet {
+        eprintln!(
+            "mlscurv: note: {name}: {points} points need about {} MiB, more than the {} MiB              available: evaluating in tiles (--memory sets the budget)",
+            (points * mls_cli::tiled::BYTES_PER_POINT) >> 20,
+            budget >> 20
+        );
+    }
+    Ok(Some(budget))
+}
+
+fn curvature_tiled(
+    a: &CurvatureArgs,
+    options: &CurvatureOptions,
+    output: &pipeline::Output,
+    budget: u64,
+) -> Result<()> {
+    let s = &a.surface;
+    let pipeline::Output::File(path, format) = output else {
+        anyhow::bail!("a tiled run writes a file");
+    };
+    let mut t = Timings::new(interactive(s.run.quiet));
+    let run = mls_cli::tiled::TiledRun {
+        input: &a.input,
+        output: path,
+        format: *format,
+        options,
+        budget,
+        temp_dir: a.temp_dir.as_deref(),
+        keep_attributes: !a.out.no_attributes,
+    };
+    let r = mls_cli::tiled::curvature(&run, &mut t)?;
+    if !s.run.quiet {
+        eprintln!("mlscurv curvature: {}", pipeline::input_name(&a.input));
+        eprintln!("  points read     {}", r.points);
+        eprintln!("  h               {}", r.scale.describe(H_OPTIONS));
+        eprintln!(
+            "  tiles           {} within {} MiB: at most {} points loaded in one, {:.3} loaded per point (halo {:.6})",
+            r.tiles,
+            budget >> 20,
+            r.largest_tile,
+            r.load_factor,
+            r.reach
+        );
+        eprintln!("  normals         {}", r.normals_source);
+        if let Some((agree, compared)) = r.agreement {
+            eprintln!(
+                "  overlaps        {:.2}% of {compared} overlap points have the same normal sign in both tiles",
+                100.0 * agree as f64 / compared.max(1) as f64
+            );
+        }
+        eprintln!("  status          {}", r.status);
+        eprintln!("  k1              {}", pipeline::percentiles(&r.k1));
+        eprintln!("  k2              {}", pipeline::percentiles(&r.k2));
+        eprintln!("  mean            {}", pipeline::percentiles(&r.mean));
+        eprintln!("  gauss           {}", pipeline::percentiles(&r.gauss));
+        if a.method == Method::Jet {
+            eprintln!("  k1 predicted sd {}", pipeline::percentiles(&r.k1_sd));
+        }
+        print_timings(&t, r.points as usize);
+        eprintln!("  wrote           {}", output.name());
+    }
+    Ok(())
 }
 
 /// What the input carries to the output, unless `--no-attributes`.

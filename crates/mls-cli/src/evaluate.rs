@@ -75,7 +75,7 @@ pub struct CurvatureColumns {
 }
 
 impl CurvatureColumns {
-    fn with_capacity(n: usize, options: &CurvatureOptions) -> Self {
+    pub fn with_capacity(n: usize, options: &CurvatureOptions) -> Self {
         Self {
             normal: Vec::with_capacity(n),
             k1: Vec::with_capacity(n),
@@ -229,9 +229,14 @@ pub fn curvature(
 /// `build`: one scale, or a scale per point with `adaptive`.
 pub fn curvature_surface(
     adaptive: bool,
-) -> impl FnOnce(&[Point], &[Vector], f64, mls_core::Cutoff) -> Result<Surface, mls_core::ConfigError>
-{
-    move |p, n, h, cutoff| {
+) -> impl FnOnce(
+    &[Point],
+    &[Vector],
+    f64,
+    mls_core::Cutoff,
+    mls_core::Frame,
+) -> Result<Surface, mls_core::ConfigError> {
+    move |p, n, h, cutoff, frame| {
         Ok(if adaptive {
             let config = mls_core::AdaptiveConfig {
                 surface: mls_core::MlsConfig {
@@ -242,7 +247,7 @@ pub fn curvature_surface(
             };
             Surface::Adaptive(AdaptiveSurface::new(p, n, &config)?)
         } else {
-            Surface::Fixed(crate::pipeline::fixed_surface(p, n, h, cutoff)?)
+            Surface::Fixed(crate::pipeline::fixed_surface(p, n, h, cutoff, frame)?)
         })
     }
 }

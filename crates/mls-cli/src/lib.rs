@@ -11,6 +11,7 @@ pub mod evaluate;
 pub mod output;
 pub mod pipeline;
 pub mod progress;
+pub mod tiled;
 
 use clap::ValueEnum;
 use mls_core::PointStatus;

@@ -10,8 +10,8 @@ use mls_core::normals::{
     estimate_normals, orient_normals_towards, spacing_statistics, suggest_h,
 };
 use mls_core::{
-    AdaptiveSurface, ConfigError, Cutoff, MlsConfig, MlsSurface, Parallelism, Point, PointStatus,
-    Vector,
+    AdaptiveSurface, ConfigError, Cutoff, Frame, MlsConfig, MlsSurface, Parallelism, Point,
+    PointStatus, Vector,
 };
 use mls_io::{FileFormat, PointCloud, ReadError};
 
@@ -535,20 +535,22 @@ pub enum Surface {
     Adaptive(AdaptiveSurface),
 }
 
-/// Builds one fixed-scale surface.
+/// Builds one fixed-scale surface in `frame`.
 pub fn fixed_surface(
     points: &[Point],
     normals: &[Vector],
     h: f64,
     cutoff: Cutoff,
+    frame: Frame,
 ) -> Result<MlsSurface, ConfigError> {
-    MlsSurface::new(
+    MlsSurface::with_frame(
         points,
         normals,
         MlsConfig {
             cutoff,
             ..MlsConfig::new(h)
         },
+        frame,
     )
 }
 
@@ -560,7 +562,7 @@ pub fn prepare<S>(
     columns: Option<&mls_io::ColumnNames>,
     s: &SurfaceOptions,
     t: &mut Timings,
-    build: impl FnOnce(&[Point], &[Vector], f64, Cutoff) -> Result<S, ConfigError>,
+    build: impl FnOnce(&[Point], &[Vector], f64, Cutoff, Frame) -> Result<S, ConfigError>,
 ) -> Result<Prepared<S>> {
     let cloud = t.time("read", || read(input, format, columns))?;
     let viewpoints = scan_viewpoints(&cloud);
@@ -605,7 +607,7 @@ pub fn build_surface<S>(
     s: &SurfaceOptions,
     t: &mut Timings,
     mut warn: impl FnMut(String),
-    build: impl FnOnce(&[Point], &[Vector], f64, Cutoff) -> Result<S, ConfigError>,
+    build: impl FnOnce(&[Point], &[Vector], f64, Cutoff, Frame) -> Result<S, ConfigError>,
 ) -> Result<Built<S>> {
     let par = Parallelism::Rayon;
     let scale = t.time("spacing", || choose_h(points, s.h, s.h_factor, par, file))?;
@@ -639,14 +641,30 @@ pub fn build_surface<S>(
     })
 }
 
-/// Builds the surface from the points that have normals, consuming the normals.
+/// Builds the surface from the points that have normals, consuming the normals, in the frame
+/// of all `points` (those without a normal too): so a tile of a cloud, built in the whole
+/// cloud's frame, gives bitwise the whole cloud's results (see `mls_core::tiling`), whichever
+/// points lack a normal.
 pub fn surface<S>(
     points: &[Point],
     normals: Vec<Option<Vector>>,
     h: f64,
     cutoff: Cutoff,
     file: &str,
-    build: impl FnOnce(&[Point], &[Vector], f64, Cutoff) -> Result<S, ConfigError>,
+    build: impl FnOnce(&[Point], &[Vector], f64, Cutoff, Frame) -> Result<S, ConfigError>,
+) -> Result<S> {
+    surface_in(points, normals, h, cutoff, Frame::of(points), file, build)
+}
+
+/// [`surface`] in a given frame: a tile's, the whole cloud's.
+pub fn surface_in<S>(
+    points: &[Point],
+    normals: Vec<Option<Vector>>,
+    h: f64,
+    cutoff: Cutoff,
+    frame: Frame,
+    file: &str,
+    build: impl FnOnce(&[Point], &[Vector], f64, Cutoff, Frame) -> Result<S, ConfigError>,
 ) -> Result<S> {
     // Usually every point has a normal: the points are then passed as they are, not copied.
     let with_normal = normals.iter().filter(|n| n.is_some()).count();
@@ -665,7 +683,7 @@ pub fn surface<S>(
             p.len()
         );
     }
-    build(p, &n, h, cutoff).with_context(|| file.to_owned())
+    build(p, &n, h, cutoff, frame).with_context(|| file.to_owned())
 }
 
 /// Runs `f` on a rayon pool with the requested number of threads (all cores by default).

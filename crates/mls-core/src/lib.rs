@@ -27,6 +27,7 @@ pub mod projection;
 pub mod status;
 pub mod stream;
 pub mod surface;
+pub mod tiling;
 
 pub use adaptive::{
     AdaptiveConfig, AdaptivePoint, AdaptiveResult, AdaptiveSurface, Location, adaptive_curvature,
@@ -45,7 +46,9 @@ pub use normals::{
 pub use projection::{LineDerivatives, ProjectionConfig};
 pub use status::PointStatus;
 pub use stream::DEFAULT_CHUNK;
-pub use surface::{Evaluator, MlsConfig, MlsSurface, Parallelism, PointResult, SurfacePoint};
+pub use surface::{
+    Evaluator, Frame, MlsConfig, MlsSurface, Parallelism, PointResult, SurfacePoint,
+};
 
 /// The README's Rust example, compiled and run as a doctest so that it cannot drift.
 #[doc = include_str!("../../../README.md")]

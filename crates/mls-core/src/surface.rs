@@ -49,6 +49,47 @@ impl MlsConfig {
     }
 }
 
+/// The internal coordinate frame of a surface: the origin its samples are stored relative to,
+/// and the half-width of the cube their Morton order is taken in.
+///
+/// Two surfaces built over different subsets of one cloud with the same frame store their
+/// common samples in the same relative order and at the same internal coordinates, so each
+/// support sums in the same order and a result is bitwise the same in both: this is what lets a
+/// cloud be evaluated tile by tile ([`crate::tiling`]) with the numbers of one whole run.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Frame {
+    /// Subtracted from every coordinate, so that coordinates far from zero (georeferenced
+    /// scans) do not cost precision in `x − q`.
+    pub origin: Vector,
+    /// The Morton key's cube is `[−half_extent, half_extent]³` around `origin`.
+    pub half_extent: f64,
+}
+
+impl Frame {
+    /// The frame of a cloud: its bounding-box centre, and the half-extent of the box about it.
+    pub fn of(points: &[Point]) -> Self {
+        let origin = bounding_box_centre(points);
+        let half_extent = points
+            .iter()
+            .fold(0.0f64, |m, p| m.max((p.coords - origin).amax()));
+        Self {
+            origin,
+            half_extent,
+        }
+    }
+
+    /// The frame of a cloud given by its bounding box (`lo`, `hi`: the coordinate-wise minimum
+    /// and maximum): bitwise [`Frame::of`] of any cloud with that box.
+    pub fn of_box(lo: Vector, hi: Vector) -> Self {
+        let origin = (lo + hi) * 0.5;
+        let half_extent = (lo - origin).amax().max((hi - origin).amax());
+        Self {
+            origin,
+            half_extent,
+        }
+    }
+}
+
 /// Curvature at a point of the MLS surface, with the implicit-function data behind it.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SurfacePoint {
@@ -83,6 +124,19 @@ impl MlsSurface {
         normals: &[Vector],
         config: MlsConfig,
     ) -> Result<Self, ConfigError> {
+        Self::with_frame(points, normals, config, Frame::of(points))
+    }
+
+    /// [`Self::new`] in a given frame (see [`Frame`]): a part of a larger cloud built in the
+    /// whole cloud's frame gives bitwise the whole cloud's results wherever it holds every
+    /// sample within reach. The frame's cube should hold the points (a point outside is
+    /// ordered as if on its face, which costs only locality).
+    pub fn with_frame(
+        points: &[Point],
+        normals: &[Vector],
+        config: MlsConfig,
+        frame: Frame,
+    ) -> Result<Self, ConfigError> {
         let kernel = Kernel::new(config.h, config.cutoff)?;
         if points.len() != normals.len() {
             return Err(ConfigError::LengthMismatch {
@@ -96,7 +150,10 @@ impl MlsSurface {
         if let Some(index) = points.iter().position(|p| !p.iter().all(|c| c.is_finite())) {
             return Err(ConfigError::NonFinitePoint { index });
         }
-        let origin = bounding_box_centre(points);
+        let Frame {
+            origin,
+            half_extent,
+        } = frame;
         let samples = points
             .iter()
             .zip(normals)
@@ -113,9 +170,7 @@ impl MlsSurface {
         // Neighbours of a query are then mostly adjacent in memory, whatever the input order
         // (scan order, or a Fibonacci spiral whose neighbours are thousands of indices apart).
         let mut samples = samples;
-        let half_extent = samples
-            .iter()
-            .fold(0.0f64, |m, s| m.max(s.point.coords.amax()));
+        // Stable: samples with one key keep their input order, which a subset keeps too.
         samples.par_sort_by_cached_key(|s| morton_key(&s.point, half_extent));
         let coords: Vec<[f64; 3]> = samples.iter().map(|s| s.point.coords.into()).collect();
         let tree = ImmutableKdTree::new_from_slice(&coords)
@@ -379,7 +434,15 @@ impl Evaluator<'_> {
             let radius = radius_of(j);
             if radius > gathered {
                 gathered = radius_of((j + 1).min(scales - 1));
-                self.gather(&local, Some(gathered));
+                // In storage order, so that the fit's sums do not depend on the tree's shape
+                // (a tile's tree differs from the whole cloud's; see [`Frame`]).
+                self.support.clear();
+                self.surface.samples_within_ordered(
+                    &local,
+                    gathered,
+                    &mut self.hits,
+                    &mut self.support,
+                );
             }
             let r2 = radius * radius;
             let inside = self

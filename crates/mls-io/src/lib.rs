@@ -55,12 +55,13 @@ use std::path::{Path, PathBuf};
 pub use attributes::{Attribute, AttributeData, AttributeType, rename_clashes};
 pub use columns::{ColumnNames, ReadOptions, UNIT_TOLERANCE};
 pub use error::{ReadError, WriteError};
-pub use las::LasTemplate;
+pub use las::{LasReader, LasSink, LasTemplate};
 pub use text::{read_csv, read_csv_with, read_xyz, read_xyz_with};
 pub use write::{
     Axis, Column, ColumnData, PlyFormat, WriteOptions, write_csv, write_csv_to, write_las,
-    write_ply, write_ply_to, write_point_cloud, write_point_cloud_as, write_point_cloud_as_with,
-    write_point_cloud_to, write_point_cloud_to_with, write_xyz, write_xyz_to,
+    write_las_chunks, write_ply, write_ply_to, write_point_cloud, write_point_cloud_as,
+    write_point_cloud_as_with, write_point_cloud_to, write_point_cloud_to_with, write_xyz,
+    write_xyz_to,
 };
 
 /// The fields the readers look for, in the order of the slots of a row.

@@ -30,8 +30,10 @@ mod write;
 
 use las::{GpsTimeType, Vlr};
 
+pub use read::LasReader;
 pub(crate) use read::{read, read_stream};
-pub(crate) use write::{write_file, write_stream};
+pub use write::LasSink;
+pub(crate) use write::{write_file, write_file_chunks, write_stream};
 
 /// The layout of a LAS input, kept so that LAS output from it looks like it: see
 /// [`WriteOptions::las`](crate::WriteOptions::las).

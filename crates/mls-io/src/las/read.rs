@@ -25,105 +25,218 @@ enum Source {
     Extra(usize),
 }
 
-/// Reads a LAS or LAZ file (the header says which) from `read`; `name` is the display name.
-pub(crate) fn read<R>(read: R, name: &str) -> Result<ReadOutcome, ReadError>
-where
-    R: Read + Seek + Send + Sync + 'static,
-{
-    let error = |message: String| ReadError::Las {
-        file: name.to_owned(),
-        message,
-    };
-    let mut reader = Reader::new(read).map_err(|e| error(header_message(&e)))?;
-    let header = reader.header();
-    let expected = header.number_of_points();
-    let format = *header.point_format();
-    let number = format
-        .to_u8()
-        .map_err(|e| error(format!("LAS header: {e}")))?;
-    let extra_len = usize::from(format.extra_bytes);
-    // Extra bytes close each record (`Format::len` counts them).
-    let base = usize::from(format.len()) - extra_len;
-    let mut notes = Vec::new();
-    if format.has_waveform {
-        notes.push(format!(
-            "{name}: point format {number}: the waveform packet fields are not carried to the \
-             output (point format {})",
-            dims::without_waveform(number)
-        ));
-    }
-    let extras = extra::parse(header).map_err(|m| error(format!("Extra Bytes VLR: {m}")))?;
-    let normal_offsets = normal_offsets(&extras);
-    let capacity = usize::try_from(expected.min(MAX_PREALLOCATED)).unwrap_or(0);
-    let mut sources = Vec::new();
-    let mut attributes = Vec::new();
-    let mut descriptors: Vec<(String, Descriptor)> = Vec::new();
-    for f in dims::fields(number) {
-        sources.push(Source::Standard(f));
-        attributes.push(Attribute {
-            name: f.name.to_owned(),
-            data: AttributeData::with_capacity(f.ty, capacity),
-        });
-    }
-    let mut taken: HashSet<String> = attributes.iter().map(|a| a.name.clone()).collect();
-    let mut described = 0;
-    for e in &extras {
-        let end = e.offset + e.size;
-        described = described.max(end);
-        if normal_offsets.is_some() && matches!(e.name.as_str(), "nx" | "ny" | "nz") {
-            continue;
-        }
-        let Some(ty) = e.ty else {
-            notes.push(format!(
-                "{name}: extra bytes {}: data type {} (not a single number) is not carried",
-                quoted(&e.name),
-                e.code
-            ));
-            continue;
-        };
-        if end > extra_len {
-            return Err(error(format!(
-                "extra bytes {} ({}) end at byte {end} of the extra bytes, but each point \
-                 has only {extra_len}",
-                quoted(&e.name),
-                ty.name()
-            )));
-        }
-        // A name such as "Echo Width" becomes one every writer can write, and one that a
-        // standard dimension already has gets a number; the descriptor keeps the original.
-        let usable = usable_name(&e.name, "extra", &mut taken);
-        sources.push(Source::Extra(base + e.offset));
-        descriptors.push((usable.clone(), e.descriptor));
-        attributes.push(Attribute {
-            name: usable,
-            data: AttributeData::with_capacity(ty, capacity),
-        });
-    }
-    if described < extra_len {
-        notes.push(format!(
-            "{name}: {} extra bytes per point without a descriptor are not carried",
-            extra_len - described
-        ));
-    }
-    let template = LasTemplate::from_header(header, number, descriptors);
+/// A LAS or LAZ file (the header says which) read chunk by chunk: the header and its
+/// layout at [`LasReader::open`], then the points in file order, a bounded number at a time,
+/// so that a file larger than memory can be streamed.
+pub struct LasReader {
+    reader: Reader,
+    name: String,
+    expected: u64,
+    done: u64,
+    /// Length of the record without its extra bytes.
+    base: usize,
+    normal_offsets: Option<[usize; 3]>,
+    sources: Vec<Source>,
+    /// Name and type of each attribute, in the order of `sources`.
+    columns: Vec<(String, crate::AttributeType)>,
+    template: LasTemplate,
+    notes: Vec<String>,
+    bounds: ([f64; 3], [f64; 3]),
+}
 
-    let mut points = Vec::with_capacity(capacity);
-    let mut normals = normal_offsets.map(|_| Vec::with_capacity(capacity));
-    let mut done: u64 = 0;
-    while done < expected {
-        let data = reader
-            .read_points(CHUNK_POINTS.min(expected - done))
-            .map_err(|e| {
-                error(if ends_early(&e) {
-                    format!(
-                        "truncated: the header says {expected} points but the data ends \
-                         within points {done}..{}",
-                        done + CHUNK_POINTS.min(expected - done)
-                    )
-                } else {
-                    format!("point data from point {done}: {e}")
+impl std::fmt::Debug for LasReader {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("LasReader")
+            .field("name", &self.name)
+            .field("expected", &self.expected)
+            .field("done", &self.done)
+            .finish_non_exhaustive()
+    }
+}
+
+impl LasReader {
+    /// Reads the header of a LAS or LAZ file at `path`.
+    ///
+    /// # Errors
+    /// [`ReadError::Io`] if it cannot be opened, [`ReadError::Las`] for a header that is not
+    /// LAS or that describes its points inconsistently.
+    pub fn open(path: &std::path::Path) -> Result<Self, ReadError> {
+        let name = path.display().to_string();
+        let file = std::fs::File::open(path).map_err(|error| ReadError::Io {
+            file: name.clone(),
+            error,
+        })?;
+        Self::new(io::BufReader::new(file), &name)
+    }
+
+    /// Reads the header from `read`; `name` is the display name.
+    pub(crate) fn new<R>(read: R, name: &str) -> Result<Self, ReadError>
+    where
+        R: Read + Seek + Send + Sync + 'static,
+    {
+        let error = |message: String| ReadError::Las {
+            file: name.to_owned(),
+            message,
+        };
+        let reader = Reader::new(read).map_err(|e| error(header_message(&e)))?;
+        let header = reader.header();
+        let expected = header.number_of_points();
+        let format = *header.point_format();
+        let number = format
+            .to_u8()
+            .map_err(|e| error(format!("LAS header: {e}")))?;
+        let extra_len = usize::from(format.extra_bytes);
+        // Extra bytes close each record (`Format::len` counts them).
+        let base = usize::from(format.len()) - extra_len;
+        let mut notes = Vec::new();
+        if format.has_waveform {
+            notes.push(format!(
+                "{name}: point format {number}: the waveform packet fields are not carried to \
+                 the output (point format {})",
+                dims::without_waveform(number)
+            ));
+        }
+        let extras = extra::parse(header).map_err(|m| error(format!("Extra Bytes VLR: {m}")))?;
+        let normal_offsets = normal_offsets(&extras);
+        let mut sources = Vec::new();
+        let mut columns = Vec::new();
+        let mut descriptors: Vec<(String, Descriptor)> = Vec::new();
+        for f in dims::fields(number) {
+            sources.push(Source::Standard(f));
+            columns.push((f.name.to_owned(), f.ty));
+        }
+        let mut taken: HashSet<String> = columns.iter().map(|(n, _)| n.clone()).collect();
+        let mut described = 0;
+        for e in &extras {
+            let end = e.offset + e.size;
+            described = described.max(end);
+            if normal_offsets.is_some() && matches!(e.name.as_str(), "nx" | "ny" | "nz") {
+                continue;
+            }
+            let Some(ty) = e.ty else {
+                notes.push(format!(
+                    "{name}: extra bytes {}: data type {} (not a single number) is not carried",
+                    quoted(&e.name),
+                    e.code
+                ));
+                continue;
+            };
+            if end > extra_len {
+                return Err(error(format!(
+                    "extra bytes {} ({}) end at byte {end} of the extra bytes, but each point \
+                     has only {extra_len}",
+                    quoted(&e.name),
+                    ty.name()
+                )));
+            }
+            // A name such as "Echo Width" becomes one every writer can write, and one that a
+            // standard dimension already has gets a number; the descriptor keeps the original.
+            let usable = usable_name(&e.name, "extra", &mut taken);
+            sources.push(Source::Extra(base + e.offset));
+            descriptors.push((usable.clone(), e.descriptor));
+            columns.push((usable, ty));
+        }
+        if described < extra_len {
+            notes.push(format!(
+                "{name}: {} extra bytes per point without a descriptor are not carried",
+                extra_len - described
+            ));
+        }
+        let template = LasTemplate::from_header(header, number, descriptors);
+        let b = header.bounds();
+        let bounds = ([b.min.x, b.min.y, b.min.z], [b.max.x, b.max.y, b.max.z]);
+        Ok(Self {
+            reader,
+            name: name.to_owned(),
+            expected,
+            done: 0,
+            base,
+            normal_offsets,
+            sources,
+            columns,
+            template,
+            notes,
+            bounds,
+        })
+    }
+
+    /// The number of points the header announces.
+    pub fn len(&self) -> u64 {
+        self.expected
+    }
+
+    /// Whether the header announces no points.
+    pub fn is_empty(&self) -> bool {
+        self.expected == 0
+    }
+
+    /// The bounding box the header records (minimum, maximum); writers keep it loosely, so a
+    /// caller that needs it exact measures the points.
+    pub fn header_bounds(&self) -> ([f64; 3], [f64; 3]) {
+        self.bounds
+    }
+
+    /// Whether the points have normals (`f64` extra bytes `nx`, `ny`, `nz`).
+    pub fn has_normals(&self) -> bool {
+        self.normal_offsets.is_some()
+    }
+
+    /// The layout of the file, for LAS output that keeps it.
+    pub fn template(&self) -> &LasTemplate {
+        &self.template
+    }
+
+    /// What the reader noticed in the header (dimensions it does not carry).
+    pub fn notes(&self) -> &[String] {
+        &self.notes
+    }
+
+    /// A cloud with no points and this file's attribute columns, to read into.
+    pub fn empty_cloud(&self, capacity: usize) -> PointCloud {
+        PointCloud {
+            points: Vec::with_capacity(capacity),
+            normals: self.normal_offsets.map(|_| Vec::with_capacity(capacity)),
+            attributes: self
+                .columns
+                .iter()
+                .map(|(name, ty)| Attribute {
+                    name: name.clone(),
+                    data: AttributeData::with_capacity(*ty, capacity),
                 })
-            })?;
+                .collect(),
+            las: None,
+            scans: None,
+        }
+    }
+
+    /// Reads the next `max` points at most (fewer at the end of the file) and appends them to
+    /// `cloud`, which must come from [`Self::empty_cloud`]. Returns how many were read: 0 once
+    /// every point is read.
+    ///
+    /// # Errors
+    /// [`ReadError::Las`] for a truncated file, undecodable point data or a coordinate that is
+    /// not finite, naming the point.
+    pub fn read_into(&mut self, cloud: &mut PointCloud, max: u64) -> Result<usize, ReadError> {
+        let (expected, done) = (self.expected, self.done);
+        if done >= expected || max == 0 {
+            return Ok(0);
+        }
+        let error = |message: String| ReadError::Las {
+            file: self.name.clone(),
+            message,
+        };
+        let want = max.min(expected - done);
+        let data = self.reader.read_points(want).map_err(|e| {
+            error(if ends_early(&e) {
+                format!(
+                    "truncated: the header says {expected} points but the data ends within \
+                     points {done}..{}",
+                    done + want
+                )
+            } else {
+                format!("point data from point {done}: {e}")
+            })
+        })?;
         if data.is_empty() {
             return Err(error(format!(
                 "truncated: the header says {expected} points but only {done} could be read"
@@ -137,11 +250,12 @@ where
                     done + index as u64
                 )));
             }
-            points.push([x, y, z]);
+            cloud.points.push([x, y, z]);
         }
         let record = data.record_len();
+        let base = self.base;
         for raw in data.raw_bytes().chunks_exact(record) {
-            if let (Some(offsets), Some(normals)) = (normal_offsets, normals.as_mut()) {
+            if let (Some(offsets), Some(normals)) = (self.normal_offsets, cloud.normals.as_mut()) {
                 normals.push(offsets.map(|o| {
                     let at = base + o;
                     raw.get(at..at + 8)
@@ -149,9 +263,9 @@ where
                         .map_or(f64::NAN, f64::from_le_bytes)
                 }));
             }
-            for (source, attribute) in sources.iter().zip(&mut attributes) {
+            for (source, attribute) in self.sources.iter().zip(&mut cloud.attributes) {
                 // Both arms are within the record: the layout is the las crate's, and the
-                // extra bytes were checked against it above.
+                // extra bytes were checked against it when the header was read.
                 match source {
                     Source::Standard(f) => {
                         if let Some(value) = dims::decode(raw, f) {
@@ -166,17 +280,24 @@ where
                 }
             }
         }
-        done += data.len() as u64;
+        self.done += data.len() as u64;
+        Ok(data.len())
     }
+}
+
+/// Reads a LAS or LAZ file (the header says which) from `read`; `name` is the display name.
+pub(crate) fn read<R>(read: R, name: &str) -> Result<ReadOutcome, ReadError>
+where
+    R: Read + Seek + Send + Sync + 'static,
+{
+    let mut reader = LasReader::new(read, name)?;
+    let capacity = usize::try_from(reader.len().min(MAX_PREALLOCATED)).unwrap_or(0);
+    let mut cloud = reader.empty_cloud(capacity);
+    while reader.read_into(&mut cloud, CHUNK_POINTS)? > 0 {}
+    cloud.las = Some(reader.template.clone());
     Ok(ReadOutcome {
-        cloud: PointCloud {
-            points,
-            normals,
-            attributes,
-            las: Some(template),
-            scans: None,
-        },
-        notes,
+        cloud,
+        notes: std::mem::take(&mut reader.notes),
     })
 }
 

@@ -19,29 +19,33 @@ const CHUNK_POINTS: usize = 1 << 16;
 
 /// The plan of a LAS file for a table: the coordinate columns, the columns that go into
 /// standard fields, the extra-bytes columns and the header.
+/// Columns are named by their index in the table, so that a plan made from one chunk of a
+/// table serves the next ([`LasSink`]).
 #[derive(Debug)]
-struct Plan<'c, 'a> {
-    xyz: [&'c Column<'a>; 3],
-    standard: Vec<(Field, &'c Column<'a>)>,
+struct Plan {
+    xyz: [usize; 3],
+    standard: Vec<(Field, usize)>,
     /// The fields without a column, written with their defaults.
     defaults: Vec<Field>,
-    extra: Vec<&'c Column<'a>>,
+    extra: Vec<usize>,
     transforms: Vector<Transform>,
     format: Format,
+    /// The table's column names and types, which every chunk must repeat.
+    schema: Vec<(String, crate::AttributeType)>,
 }
 
 /// Checks the table and chooses the header for it.
-fn plan<'c, 'a>(
+fn plan(
     file: &str,
-    columns: &'c [Column<'a>],
+    columns: &[Column<'_>],
     compressed: bool,
     template: Option<&LasTemplate>,
-) -> Result<(Plan<'c, 'a>, Builder, usize), WriteError> {
+) -> Result<(Plan, Builder, usize), WriteError> {
     let rows = validate(file, columns)?;
     let find = |name: &'static str| {
         columns
             .iter()
-            .find(|c| c.name == name)
+            .position(|c| c.name == name)
             .ok_or_else(|| WriteError::MissingCoordinate {
                 file: file.to_owned(),
                 field: name,
@@ -55,7 +59,7 @@ fn plan<'c, 'a>(
     let mut standard = Vec::new();
     let mut defaults = Vec::new();
     for f in dims::fields(number) {
-        let column = columns.iter().find(|c| {
+        let column = columns.iter().position(|c| {
             c.name == f.name && matches!(c.data, ColumnData::Attribute(d) if fits(d, &f))
         });
         match column {
@@ -63,12 +67,11 @@ fn plan<'c, 'a>(
             None => defaults.push(f),
         }
     }
-    let extra: Vec<&Column<'_>> = columns
-        .iter()
-        .filter(|c| !matches!(c.name, "x" | "y" | "z"))
-        .filter(|c| !standard.iter().any(|(_, s)| s.name == c.name))
+    let extra: Vec<usize> = (0..columns.len())
+        .filter(|&i| !matches!(columns[i].name, "x" | "y" | "z"))
+        .filter(|i| !standard.iter().any(|(_, s)| s == i))
         .collect();
-    for column in &extra {
+    for column in extra.iter().map(|&i| &columns[i]) {
         if column.name.len() > MAX_NAME_BYTES {
             return Err(WriteError::InvalidColumnName {
                 file: file.to_owned(),
@@ -89,13 +92,13 @@ fn plan<'c, 'a>(
                 z: transform(2),
             }
         }
-        None => fitted_transforms(file, &xyz, rows)?,
+        None => fitted_transforms(file, &xyz.map(|i| &columns[i]), rows)?,
     };
     let mut builder = Builder::from(Version::new(1, 4));
     let mut format = Format::new(number).map_err(|e| las_error(file, &e))?;
     let extra_len: usize = extra
         .iter()
-        .map(|c| extra::column_type(&c.data).size())
+        .map(|&i| extra::column_type(&columns[i].data).size())
         .sum();
     format.extra_bytes = u16::try_from(extra_len)
         .ok()
@@ -120,7 +123,10 @@ fn plan<'c, 'a>(
             user_id: extra::USER_ID.to_owned(),
             record_id: extra::RECORD_ID,
             description: "Extra Bytes".to_owned(),
-            data: extra.iter().flat_map(|c| descriptor(c, template)).collect(),
+            data: extra
+                .iter()
+                .flat_map(|&i| descriptor(&columns[i], template))
+                .collect(),
         });
     }
     Ok((
@@ -131,10 +137,19 @@ fn plan<'c, 'a>(
             extra,
             transforms,
             format,
+            schema: schema(columns),
         },
         builder,
         rows,
     ))
+}
+
+/// The names and stored types of a table's columns.
+fn schema(columns: &[Column<'_>]) -> Vec<(String, crate::AttributeType)> {
+    columns
+        .iter()
+        .map(|c| (c.name.to_owned(), extra::column_type(&c.data)))
+        .collect()
 }
 
 /// Whether every value of `data` can be stored in field `f` as it is.
@@ -250,7 +265,7 @@ where
     let (plan, builder, rows) = plan(file, columns, compressed, template)?;
     let header = builder.into_header().map_err(|e| las_error(file, &e))?;
     let mut writer = Writer::new(write, header).map_err(|e| las_error(file, &e))?;
-    let written = write_points(&mut writer, &plan, rows).and_then(|()| writer.close());
+    let written = write_points(&mut writer, &plan, columns, rows).and_then(|()| writer.close());
     match written {
         Ok(()) => writer.into_inner().map_err(|e| las_error(file, &e)),
         Err(e) => {
@@ -263,7 +278,12 @@ where
 }
 
 /// Encodes the rows as raw point records, chunk by chunk.
-fn write_points<W>(writer: &mut Writer<W>, plan: &Plan<'_, '_>, rows: usize) -> las::Result<()>
+fn write_points<W>(
+    writer: &mut Writer<W>,
+    plan: &Plan,
+    columns: &[Column<'_>],
+    rows: usize,
+) -> las::Result<()>
 where
     W: Write + Seek + Send + Sync + 'static,
 {
@@ -277,9 +297,9 @@ where
         let end = rows.min(start + CHUNK_POINTS);
         let mut bytes = vec![0u8; (end - start) * record_len];
         for (row, record) in (start..end).zip(bytes.chunks_exact_mut(record_len)) {
-            for ((column, transform), at) in plan.xyz.iter().zip(&transforms).zip([0, 4, 8]) {
+            for ((&column, transform), at) in plan.xyz.iter().zip(&transforms).zip([0, 4, 8]) {
                 // The nearest step of the header's grid.
-                let stored = transform.inverse(f64_at(&column.data, row))?;
+                let stored = transform.inverse(f64_at(&columns[column].data, row))?;
                 record[at..at + 4].copy_from_slice(&stored.to_le_bytes());
             }
             for f in &plan.defaults {
@@ -288,13 +308,13 @@ where
                     dims::encode(record, f, Scalar::U8(1));
                 }
             }
-            for (f, column) in &plan.standard {
-                if let Some(v) = column_value(&column.data, row) {
+            for &(ref f, column) in &plan.standard {
+                if let Some(v) = column_value(&columns[column].data, row) {
                     dims::encode(record, f, v);
                 }
             }
             let mut at = base;
-            for column in &plan.extra {
+            for column in plan.extra.iter().map(|&i| &columns[i]) {
                 value.clear();
                 let ty = extra::column_type(&column.data);
                 if let Some(v) = column_value(&column.data, row) {
@@ -312,6 +332,124 @@ where
         start = end;
     }
     Ok(())
+}
+
+/// A LAS or LAZ file written a chunk of rows at a time ([`crate::write_las_chunks`]), for
+/// tables larger than memory. Every chunk has the same columns, named and typed alike; the
+/// layout (point format, scale, offset, extra bytes) is the template's, with the extra-bytes
+/// attributes chosen from the first chunk as [`crate::write_las`] chooses them for a whole
+/// table.
+pub struct LasSink {
+    file: String,
+    compressed: bool,
+    template: LasTemplate,
+    handle: Option<File>,
+    writer: Option<(Writer<BufWriter<File>>, Plan)>,
+    rows: u64,
+}
+
+impl std::fmt::Debug for LasSink {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("LasSink")
+            .field("file", &self.file)
+            .field("rows", &self.rows)
+            .finish_non_exhaustive()
+    }
+}
+
+impl LasSink {
+    /// Appends the rows of `columns`.
+    ///
+    /// # Errors
+    /// Those of [`crate::write_las`] for the first chunk; [`WriteError::Las`] when a later
+    /// chunk's columns differ from the first's, or the `las` writer fails.
+    pub fn write(&mut self, columns: &[Column<'_>]) -> Result<(), WriteError> {
+        let file = self.file.clone();
+        if self.writer.is_none() {
+            let (plan, builder, _) = plan(&file, columns, self.compressed, Some(&self.template))?;
+            let header = builder.into_header().map_err(|e| las_error(&file, &e))?;
+            let handle = self.handle.take().ok_or_else(|| WriteError::Las {
+                file: file.clone(),
+                message: "the output was closed after an error".to_owned(),
+            })?;
+            let writer =
+                Writer::new(BufWriter::new(handle), header).map_err(|e| las_error(&file, &e))?;
+            self.writer = Some((writer, plan));
+        }
+        let rows = validate(&file, columns)?;
+        let Some((writer, plan)) = self.writer.as_mut() else {
+            unreachable!("set above");
+        };
+        if plan.schema != schema(columns) {
+            return Err(WriteError::Las {
+                file,
+                message: "a chunk's columns differ from the first chunk's".to_owned(),
+            });
+        }
+        if let Err(e) = write_points(writer, plan, columns, rows) {
+            // See `write_to`: a failed `las` writer panics when dropped.
+            if let Some(w) = self.writer.take() {
+                std::mem::forget(w);
+            }
+            return Err(las_error(&file, &e));
+        }
+        self.rows += rows as u64;
+        Ok(())
+    }
+
+    /// Rows written so far.
+    pub fn rows(&self) -> u64 {
+        self.rows
+    }
+
+    /// Completes the file: header counts and bounds, LAZ chunk table.
+    fn finish(mut self) -> Result<(), WriteError> {
+        let file = self.file.clone();
+        let Some((mut writer, _)) = self.writer.take() else {
+            return Err(WriteError::NoColumns { file });
+        };
+        if let Err(e) = writer.close() {
+            std::mem::forget(writer);
+            return Err(las_error(&file, &e));
+        }
+        let mut inner = writer.into_inner().map_err(|e| las_error(&file, &e))?;
+        inner
+            .flush()
+            .map_err(|error| WriteError::Io { file, error })
+    }
+}
+
+/// Runs `body` with a [`LasSink`] on an already open file and completes the file.
+pub(crate) fn write_file_chunks<E: From<WriteError>>(
+    out: &mut BufWriter<&File>,
+    file: &str,
+    compressed: bool,
+    template: &LasTemplate,
+    body: impl FnOnce(&mut LasSink) -> Result<(), E>,
+) -> Result<(), E> {
+    let io_error = |error| WriteError::Io {
+        file: file.to_owned(),
+        error,
+    };
+    out.flush().map_err(io_error)?;
+    let handle = out.get_ref().try_clone().map_err(io_error)?;
+    let mut sink = LasSink {
+        file: file.to_owned(),
+        compressed,
+        template: template.clone(),
+        handle: Some(handle),
+        writer: None,
+        rows: 0,
+    };
+    let result = body(&mut sink);
+    if result.is_err() {
+        // Nothing more is written; the caller removes the file.
+        if let Some(w) = sink.writer.take() {
+            std::mem::forget(w);
+        }
+        return result;
+    }
+    sink.finish().map_err(E::from)
 }
 
 /// Writes the table as LAS (or LAZ if `compressed`) into an already open file, through a

@@ -445,19 +445,42 @@ pub(crate) fn validate(file: &str, columns: &[Column<'_>]) -> Result<usize, Writ
     Ok(first.data.len())
 }
 
+/// Writes LAS (LAZ if `compressed`) to `path` a chunk at a time, atomically: `body` hands
+/// the chunks, each a table of the same columns, to [`LasSink::write`](crate::LasSink::write);
+/// the file is renamed over `path` only when `body` succeeds and the file is complete. The
+/// layout is `template`'s, as [`WriteOptions::las`] gives it to [`write_las`]'s whole tables.
+///
+/// # Errors
+/// `body`'s, and those of [`write_las`]; on any error no file is left behind.
+pub fn write_las_chunks<E: From<WriteError>>(
+    path: &Path,
+    compressed: bool,
+    template: &LasTemplate,
+    body: impl FnOnce(&mut crate::LasSink) -> Result<(), E>,
+) -> Result<(), E> {
+    let file = path.display().to_string();
+    write_atomically(path, |out| {
+        crate::las::write_file_chunks(out, &file, compressed, template, body)
+    })
+}
+
 /// Writes through a temporary file in the destination's directory, renamed over the
 /// destination only once everything is written and synced.
-fn write_atomically(
+fn write_atomically<E: From<WriteError>>(
     path: &Path,
-    body: impl FnOnce(&mut BufWriter<&File>) -> Result<(), WriteError>,
-) -> Result<(), WriteError> {
+    body: impl FnOnce(&mut BufWriter<&File>) -> Result<(), E>,
+) -> Result<(), E> {
     let file = path.display().to_string();
     // Through a symbolic link, the file it points to is replaced and the link kept, as
     // writing into the link would do.
     let resolved = resolve_links(path).map_err(io_error(&file))?;
+    let io_error = |file: &String| {
+        let file = file.clone();
+        move |error| E::from(WriteError::Io { file, error })
+    };
     let path = resolved.as_path();
     let Some(file_name) = path.file_name() else {
-        return Err(WriteError::NotAFilePath { file });
+        return Err(WriteError::NotAFilePath { file }.into());
     };
     // The temporary file must be on the same file system for the rename to be atomic.
     let dir = match path.parent() {
