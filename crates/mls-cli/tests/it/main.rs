@@ -22,3 +22,4 @@ mod project;
 mod render;
 mod sphere;
 mod streams;
+mod tiled;

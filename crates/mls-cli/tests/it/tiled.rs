@@ -1,0 +1,190 @@
+//! Tiled (out-of-core) runs against in-memory runs of the same LAS cloud: bitwise with the
+//! file's normals and a given h, close with estimated normals, clean on failure.
+
+use std::path::Path;
+
+use mls_io::{Attribute, AttributeData, Axis, Column, FileFormat};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+use crate::common::{listing, mlscurv, run, run_ok};
+
+/// A budget that splits a few tens of thousands of points into tens of tiles: 196 MiB is the
+/// fixed part and about 5,600 loaded points.
+const SMALL_BUDGET: &str = "195MiB";
+
+/// Rolling terrain, `n` points uniformly at random over `side` × `side` metres far from the
+/// origin, with exact normals and an intensity, written as LAS by mls-io.
+fn write_terrain(path: &Path, n: usize, side: f64, seed: u64) {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let (mut points, mut normals, mut intensity) = (Vec::new(), Vec::new(), Vec::new());
+    for _ in 0..n {
+        let (x, y) = (rng.random::<f64>() * side, rng.random::<f64>() * side);
+        let z = 2.0 * (x / 7.0).sin() + 1.5 * (y / 5.0).cos() + 0.05 * x;
+        let (fx, fy) = (
+            2.0 / 7.0 * (x / 7.0).cos() + 0.05,
+            -1.5 / 5.0 * (y / 5.0).sin(),
+        );
+        let norm = (fx * fx + fy * fy + 1.0).sqrt();
+        points.push([x + 420_000.0, y + 5_100_000.0, z + 300.0]);
+        normals.push([-fx / norm, -fy / norm, 1.0 / norm]);
+        intensity.push(rng.random_range(0..4096u16));
+    }
+    let intensity = Attribute {
+        name: "intensity".into(),
+        data: AttributeData::U16(intensity),
+    };
+    let columns = [
+        Column::component("x", &points, Axis::X),
+        Column::component("y", &points, Axis::Y),
+        Column::component("z", &points, Axis::Z),
+        Column::component("nx", &normals, Axis::X),
+        Column::component("ny", &normals, Axis::Y),
+        Column::component("nz", &normals, Axis::Z),
+        Column::attribute(&intensity),
+    ];
+    mls_io::write_point_cloud_as(path, FileFormat::Las, &columns, mls_io::PlyFormat::Ascii)
+        .unwrap();
+}
+
+/// The number of tiles the summary reports.
+fn tiles(stderr: &str) -> usize {
+    let line = stderr
+        .lines()
+        .find(|l| l.trim_start().starts_with("tiles"))
+        .unwrap_or_else(|| panic!("no tiles line in\n{stderr}"));
+    line.split_whitespace().nth(1).unwrap().parse().unwrap()
+}
+
+fn curvature(input: &Path, output: &Path, extra: &[&str]) -> crate::common::Run {
+    run_ok(
+        mlscurv()
+            .arg("curvature")
+            .arg(input)
+            .arg("-o")
+            .arg(output)
+            .args(extra),
+    )
+}
+
+/// Both estimators, file normals, a given h: the tiled output file is the in-memory one, byte
+/// for byte (every coordinate, attribute and computed column), and the temporary tiles are
+/// gone.
+#[test]
+fn tiled_runs_equal_the_in_memory_run_bitwise() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("terrain.las");
+    write_terrain(&input, 60_000, 150.0, 7);
+    for method in ["jet", "paper"] {
+        let whole = dir.path().join(format!("whole-{method}.las"));
+        let tiled = dir.path().join(format!("tiled-{method}.las"));
+        let options = ["--h", "1.1", "--method", method];
+        curvature(&input, &whole, &options);
+        let r = curvature(
+            &input,
+            &tiled,
+            &[&options[..], &["--memory", SMALL_BUDGET]].concat(),
+        );
+        assert!(tiles(&r.stderr) >= 16, "{}", r.stderr);
+        let (a, b) = (
+            std::fs::read(&whole).unwrap(),
+            std::fs::read(&tiled).unwrap(),
+        );
+        assert_eq!(a.len(), b.len(), "{method}: file sizes differ");
+        let first = a.iter().zip(&b).position(|(x, y)| x != y);
+        assert_eq!(first, None, "{method}: files differ from byte {first:?}");
+    }
+    let left: Vec<_> = listing(dir.path())
+        .into_iter()
+        .filter(|n| n.to_string_lossy().starts_with('.'))
+        .collect();
+    assert!(left.is_empty(), "temporary files left: {left:?}");
+}
+
+/// Estimated normals are estimated and oriented per tile: the overlaps agree, and the
+/// curvature is the in-memory run's away from rounding where the neighbourhoods are whole.
+#[test]
+fn tiled_estimated_normals_agree_across_tiles() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("terrain.las");
+    write_terrain(&input, 40_000, 100.0, 8);
+    let whole = dir.path().join("whole.laz");
+    let tiled = dir.path().join("tiled.laz");
+    let options = ["--normals", "estimate", "--orient", "up", "--h", "1.1"];
+    curvature(&input, &whole, &options);
+    let r = curvature(
+        &input,
+        &tiled,
+        &[&options[..], &["--memory", SMALL_BUDGET]].concat(),
+    );
+    assert!(tiles(&r.stderr) >= 8, "{}", r.stderr);
+    let line = r
+        .stderr
+        .lines()
+        .find(|l| l.contains("overlap points"))
+        .unwrap();
+    let share: f64 = line
+        .split('%')
+        .next()
+        .unwrap()
+        .split_whitespace()
+        .last()
+        .unwrap()
+        .parse()
+        .unwrap();
+    assert!(share >= 99.9, "{line}");
+    let k1 = |path: &Path| -> Vec<f64> {
+        let cloud = mls_io::read_point_cloud(path).unwrap();
+        let a = cloud.attributes.iter().find(|a| a.name == "k1").unwrap();
+        (0..a.data.len())
+            .map(|i| a.data.f64_at(i).unwrap())
+            .collect()
+    };
+    let (a, b) = (k1(&whole), k1(&tiled));
+    let close = a
+        .iter()
+        .zip(&b)
+        .filter(|(x, y)| (*x - *y).abs() <= 1e-9 * (1.0 + x.abs()))
+        .count();
+    assert!(
+        close as f64 >= 0.99 * a.len() as f64,
+        "{close} of {} agree",
+        a.len()
+    );
+}
+
+#[test]
+fn a_budget_too_small_or_an_output_that_cannot_stream_is_a_clear_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("terrain.las");
+    write_terrain(&input, 5_000, 40.0, 9);
+    let r = run(mlscurv()
+        .arg("curvature")
+        .arg(&input)
+        .arg("-o")
+        .arg(dir.path().join("out.las"))
+        .args(["--memory", "100MiB"]));
+    assert_eq!(r.code, Some(1), "{}", r.stderr);
+    assert!(
+        r.stderr.contains("--memory") && r.stderr.contains("too small"),
+        "{}",
+        r.stderr
+    );
+    let r = run(mlscurv()
+        .arg("curvature")
+        .arg(&input)
+        .arg("-o")
+        .arg(dir.path().join("out.csv"))
+        .args(["--memory", "193MiB"]));
+    assert_eq!(r.code, Some(1), "{}", r.stderr);
+    assert!(r.stderr.contains(".las or .laz"), "{}", r.stderr);
+    let r = run(mlscurv()
+        .arg("curvature")
+        .arg(&input)
+        .arg("-o")
+        .arg(dir.path().join("out.las"))
+        .args(["--memory", "lots"]));
+    assert_eq!(r.code, Some(2), "{}", r.stderr);
+    assert!(r.stderr.contains("not a size"), "{}", r.stderr);
+    assert_eq!(listing(dir.path()).len(), 1, "{:?}", listing(dir.path()));
+}
