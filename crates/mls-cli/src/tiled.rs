@@ -34,14 +34,15 @@ use crate::evaluate::{self, CurvatureColumns};
 use crate::pipeline::{self, Scale, Timings};
 use crate::{At, CurvatureOptions, Method, NormalsMode};
 
-/// Memory per loaded point while a tile is evaluated, measured as the peak resident memory of
-/// whole in-memory runs over their point count (docs/benchmarks.md, "Out of core"): with
-/// estimated normals, the heaviest case, 1M points peaked at about 0.5 GB.
-pub const BYTES_PER_POINT: u64 = 560;
+/// Memory per loaded point while a tile is evaluated: the points, normals, surface and k-d
+/// tree, the neighbour graph of estimated normals, the results of its own points. Measured as
+/// peak resident memory over points loaded (docs/benchmarks.md, "Out of core"): about 350
+/// bytes with estimated normals, the heaviest case, on tiles of 0.27M and 2M points.
+pub const BYTES_PER_POINT: u64 = 400;
 
-/// Memory besides the tile: the grid of counts, the reader's and writer's chunks, the
-/// buffers of the tile files, the program.
-pub const FIXED_BYTES: u64 = 192 << 20;
+/// Memory besides the tile: the program, the grid of counts, the reader's and writer's
+/// chunks, the buffers of the tile files (measured: about 25 MB in all).
+pub const FIXED_BYTES: u64 = 64 << 20;
 
 /// Cells of the counting grid: 8 MB of counts, and boxes of about 100 points on 100M.
 const GRID_CELLS: usize = 1 << 20;
@@ -49,9 +50,12 @@ const GRID_CELLS: usize = 1 << 20;
 /// Points read per chunk.
 const CHUNK: u64 = 1 << 16;
 
-/// At most this many points are gathered to measure the spacing (about 30 tiles' worth of
-/// the plan at the smallest budgets is never needed: a few hundred thousand give the median).
-const SPACING_SAMPLE: u64 = 1 << 21;
+/// The spacing is measured on up to [`SPACING_TILES`] tiles of this many points spread over
+/// the cloud: the same sample whatever the budget, once it holds them.
+const SPACING_TILE: u64 = 1 << 18;
+
+/// See [`SPACING_TILE`].
+const SPACING_TILES: u64 = 8;
 
 /// Bytes of a result record: 16 `f64` (normal, k1, k2, mean, gauss, d1, d2, k1_sd, k2_sd),
 /// the status and the estimated normal's code.
@@ -447,8 +451,9 @@ pub fn curvature(run: &TiledRun<'_>, t: &mut Timings) -> Result<TiledSummary> {
     Ok(summary)
 }
 
-/// h from the spacing of whole tiles spread over the cloud, at most [`SPACING_SAMPLE`]
-/// points (all the points of a cloud that small: then h is the in-memory run's).
+/// h from the spacing of up to [`SPACING_TILES`] tiles of [`SPACING_TILE`] points spread
+/// over the cloud (all of a cloud that small: then h is the in-memory run's), fewer if the
+/// budget's `capacity` holds fewer.
 fn sampled_scale(
     input: &Path,
     grid: &Grid,
@@ -457,14 +462,14 @@ fn sampled_scale(
     factor: f64,
     name: &str,
 ) -> Result<Scale> {
-    let size = capacity.min(SPACING_SAMPLE);
-    let plan = TilePlan::new(grid.clone(), counts, 0.0, size.max(1))
+    let size = SPACING_TILE.min(capacity);
+    let plan = TilePlan::new(grid.clone(), counts, 0.0, size)
         .with_context(|| format!("{name}: planning the spacing sample"))?;
     let tiles = plan.tiles();
-    let total: u64 = tiles.iter().map(|t| t.points).sum();
-    // Every k-th tile, spread over the plan (whose order follows space), within the size.
-    let per = (total / tiles.len() as u64).max(1);
-    let take = (size / per).clamp(1, tiles.len() as u64) as usize;
+    // Every k-th tile (the plan's order follows space), as many as the budget holds.
+    let take = (capacity / size)
+        .clamp(1, SPACING_TILES)
+        .min(tiles.len() as u64) as usize;
     let chosen: Vec<bool> = (0..tiles.len())
         .map(|i| (i * take) / tiles.len() != ((i + 1) * take) / tiles.len())
         .collect();

@@ -9,9 +9,9 @@ use rand_chacha::ChaCha8Rng;
 
 use crate::common::{listing, mlscurv, run, run_ok};
 
-/// A budget that splits a few tens of thousands of points into tens of tiles: 196 MiB is the
-/// fixed part and about 5,600 loaded points.
-const SMALL_BUDGET: &str = "195MiB";
+/// A budget that splits a few tens of thousands of points into tens of tiles: 64 MiB is the
+/// fixed part and about 5,200 loaded points.
+const SMALL_BUDGET: &str = "66MiB";
 
 /// Rolling terrain, `n` points uniformly at random over `side` × `side` metres far from the
 /// origin, with exact normals and an intensity, written as LAS by mls-io.
@@ -163,7 +163,7 @@ fn a_budget_too_small_or_an_output_that_cannot_stream_is_a_clear_error() {
         .arg(&input)
         .arg("-o")
         .arg(dir.path().join("out.las"))
-        .args(["--memory", "100MiB"]));
+        .args(["--memory", "64MiB"]));
     assert_eq!(r.code, Some(1), "{}", r.stderr);
     assert!(
         r.stderr.contains("--memory") && r.stderr.contains("too small"),
@@ -175,7 +175,7 @@ fn a_budget_too_small_or_an_output_that_cannot_stream_is_a_clear_error() {
         .arg(&input)
         .arg("-o")
         .arg(dir.path().join("out.csv"))
-        .args(["--memory", "193MiB"]));
+        .args(["--memory", "65MiB"]));
     assert_eq!(r.code, Some(1), "{}", r.stderr);
     assert!(r.stderr.contains(".las or .laz"), "{}", r.stderr);
     let r = run(mlscurv()
