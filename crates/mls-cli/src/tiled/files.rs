@@ -1,0 +1,143 @@
+//! The files of a tiled run: sizes and memory, the temporary directory (removed on Ctrl-C),
+//! and the input read chunk by chunk.
+
+use std::path::{Path, PathBuf};
+use std::sync::Mutex;
+
+use anyhow::{Context, Result};
+use mls_io::LasReader;
+
+use super::CHUNK;
+
+/// The budget in bytes from the machine's available memory (Linux: `MemAvailable`), leaving a
+/// fifth to the rest of the system; `None` where it cannot be read.
+pub fn available_memory() -> Option<u64> {
+    let info = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let line = info.lines().find(|l| l.starts_with("MemAvailable:"))?;
+    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kib * 1024)
+}
+
+/// Parses a memory size: a number with an optional unit `B`, `K`/`KB`/`KiB`, `M`/`MiB`,
+/// `G`/`GiB`, `T`/`TiB` (powers of 1024 for all), case-insensitive.
+pub fn parse_size(text: &str) -> Result<u64, String> {
+    let t = text.trim();
+    let split = t
+        .find(|c: char| !(c.is_ascii_digit() || c == '.'))
+        .unwrap_or(t.len());
+    let (number, unit) = t.split_at(split);
+    let value: f64 = number
+        .parse()
+        .map_err(|_| format!("`{text}` is not a size such as 2GiB, 512M or 1500000000"))?;
+    let shift = match unit.trim().to_ascii_lowercase().as_str() {
+        "" | "b" => 0,
+        "k" | "kb" | "kib" => 10,
+        "m" | "mb" | "mib" => 20,
+        "g" | "gb" | "gib" => 30,
+        "t" | "tb" | "tib" => 40,
+        other => {
+            return Err(format!(
+                "unknown unit `{other}` in `{text}` (use K, M, G or T)"
+            ));
+        }
+    };
+    let bytes = value * (1u64 << shift) as f64;
+    if !(bytes >= 1.0 && bytes < u64::MAX as f64) {
+        return Err(format!("`{text}` is not a positive size"));
+    }
+    Ok(bytes as u64)
+}
+
+/// The directories to remove on Ctrl-C, and the outputs whose temporary files to remove.
+static CLEANUP: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+
+/// Removes the registered temporary directories and output files and exits with 130, as a
+/// shell reports an interrupted command.
+fn on_interrupt() {
+    if let Ok(paths) = CLEANUP.lock() {
+        for path in paths.iter() {
+            if path.is_dir() {
+                let _ = std::fs::remove_dir_all(path);
+            } else if let (Some(dir), Some(name)) = (path.parent(), path.file_name()) {
+                // The atomic writer's temporary file: `.NAME.XXXXXX.tmp` beside the output.
+                let prefix = format!(".{}.", name.to_string_lossy());
+                let dir = if dir.as_os_str().is_empty() {
+                    Path::new(".")
+                } else {
+                    dir
+                };
+                for entry in std::fs::read_dir(dir).into_iter().flatten().flatten() {
+                    let n = entry.file_name().to_string_lossy().into_owned();
+                    if n.starts_with(&prefix) && n.ends_with(".tmp") {
+                        let _ = std::fs::remove_file(entry.path());
+                    }
+                }
+            }
+        }
+    }
+    eprintln!("mlscurv: interrupted; temporary files removed");
+    std::process::exit(130);
+}
+
+/// The temporary directory of a run, removed when dropped and on Ctrl-C.
+pub(super) struct Workspace {
+    pub(super) dir: tempfile::TempDir,
+}
+
+impl Workspace {
+    pub(super) fn new(parent: &Path, output: &Path) -> Result<Self> {
+        let dir = tempfile::Builder::new()
+            .prefix(".mlscurv-tiles-")
+            .tempdir_in(parent)
+            .with_context(|| {
+                format!("{}: cannot create a temporary directory", parent.display())
+            })?;
+        if let Ok(mut paths) = CLEANUP.lock() {
+            paths.push(dir.path().to_path_buf());
+            paths.push(output.to_path_buf());
+        }
+        // Once per process; a second run in the same process keeps the first handler.
+        let _ = ctrlc::set_handler(on_interrupt);
+        Ok(Self { dir })
+    }
+
+    pub(super) fn path(&self, name: &str) -> PathBuf {
+        self.dir.path().join(name)
+    }
+}
+
+impl Drop for Workspace {
+    fn drop(&mut self) {
+        if let Ok(mut paths) = CLEANUP.lock() {
+            paths.clear();
+        }
+    }
+}
+
+pub(super) fn open_reader(input: &Path) -> Result<LasReader> {
+    Ok(LasReader::open(input)?)
+}
+
+/// Reads every point of `input` in chunks, calling `f` with each chunk's first index and
+/// cloud.
+pub(super) fn for_each_chunk(
+    input: &Path,
+    with_attributes: bool,
+    mut f: impl FnMut(u64, &mls_io::PointCloud) -> Result<()>,
+) -> Result<()> {
+    let mut reader = open_reader(input)?;
+    let mut first = 0u64;
+    loop {
+        let mut chunk = reader.empty_cloud(CHUNK as usize);
+        if !with_attributes {
+            // Nothing to decode them into: they are skipped.
+            chunk.attributes.clear();
+        }
+        let n = reader.read_into(&mut chunk, CHUNK)?;
+        if n == 0 {
+            return Ok(());
+        }
+        f(first, &chunk)?;
+        first += n as u64;
+    }
+}

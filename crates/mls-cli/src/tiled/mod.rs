@@ -1,0 +1,363 @@
+//! `mlscurv curvature` on a LAS/LAZ cloud larger than memory: tiles with halos on disk.
+//!
+//! Four streaming passes over the input, and the tiles one at a time in between:
+//! 1. *scan*: the exact bounding box (the whole cloud's [`Frame`]) and the points per cell of
+//!    a grid ([`mls_core::tiling`]);
+//! 2. *spacing* (without `--h`): h from the points of a few tiles spread over the cloud;
+//! 3. *tiles*: each point is appended to the file of every tile that loads it (its own, and
+//!    those whose box lies within the reach, [`tiling::reach`]);
+//! 4. per tile: normals, the surface in the whole cloud's frame, the curvature at its own
+//!    points, appended to the tile's result file (the tile's input file is then removed);
+//! 5. *write*: the input is read again, and each point's attributes are written with the
+//!    next result of its tile, in input order.
+//!
+//! With the file's normals and a given h the results are bitwise those of one in-memory run:
+//! a result depends only on the samples within the reach, all of them in the tile, and the
+//! surface sums them in the same order ([`mls_core::Frame`]). Estimated normals are estimated
+//! and oriented per tile; their agreement in the overlaps is measured and reported.
+//!
+//! Temporary files live in one directory (in the output's directory unless `--temp-dir`),
+//! removed on success, on error and on Ctrl-C; the free space is checked first.
+
+mod files;
+mod tile;
+
+use std::fs::File;
+use std::io::{BufWriter, Write};
+use std::path::Path;
+
+use anyhow::{Context, Result, bail};
+use mls_core::normals::{DEFAULT_SPACING_NEIGHBOURS, Orientation, spacing_statistics, suggest_h};
+use mls_core::tiling::{self, Grid, TilePlan};
+use mls_core::{Frame, Parallelism, Point, Vector};
+use mls_io::FileFormat;
+
+use files::{Workspace, for_each_chunk, open_reader};
+pub use files::{available_memory, parse_size};
+use tile::{RESULT_BYTES, evaluate_tile, write_output};
+
+use crate::evaluate;
+use crate::pipeline::{self, Scale, Timings};
+use crate::{At, CurvatureOptions, Method, NormalsMode};
+
+/// Memory per loaded point while a tile is evaluated: the points, normals, surface and k-d
+/// tree, the neighbour graph of estimated normals, the results of its own points. Measured as
+/// peak resident memory over points loaded (docs/benchmarks.md, "Out of core"): about 350
+/// bytes with estimated normals, the heaviest case, on tiles of 0.27M and 2M points.
+pub const BYTES_PER_POINT: u64 = 400;
+
+/// Memory besides the tile: the program, the grid of counts, the reader's and writer's
+/// chunks, the buffers of the tile files (measured: about 25 MB in all).
+pub const FIXED_BYTES: u64 = 64 << 20;
+
+/// Cells of the counting grid: 8 MB of counts, and boxes of about 100 points on 100M.
+const GRID_CELLS: usize = 1 << 20;
+
+/// Points read per chunk.
+const CHUNK: u64 = 1 << 16;
+
+/// The spacing is measured on up to [`SPACING_TILES`] tiles of this many points spread over
+/// the cloud: the same sample whatever the budget, once it holds them.
+const SPACING_TILE: u64 = 1 << 18;
+
+/// See [`SPACING_TILE`].
+const SPACING_TILES: u64 = 8;
+
+/// What a tiled run is asked to do.
+#[derive(Debug)]
+pub struct TiledRun<'a> {
+    pub input: &'a Path,
+    pub output: &'a Path,
+    pub format: FileFormat,
+    pub options: &'a CurvatureOptions,
+    /// Memory budget in bytes.
+    pub budget: u64,
+    /// Where the temporary tiles go; default the output's directory.
+    pub temp_dir: Option<&'a Path>,
+    /// Whether the input's attributes are carried.
+    pub keep_attributes: bool,
+}
+
+/// What the summary reports.
+#[derive(Debug)]
+pub struct TiledSummary {
+    pub points: u64,
+    pub scale: Scale,
+    pub normals_source: String,
+    pub tiles: usize,
+    /// Most points loaded by one tile (core and halo).
+    pub largest_tile: u64,
+    /// Points loaded in all, over the points: the halos' cost.
+    pub load_factor: f64,
+    pub reach: f64,
+    /// Status counts, as the summary words them.
+    pub status: String,
+    /// Every k-th point's k1 and predicted error, for the percentiles.
+    pub k1: Vec<f64>,
+    pub k2: Vec<f64>,
+    pub mean: Vec<f64>,
+    pub gauss: Vec<f64>,
+    pub k1_sd: Vec<f64>,
+    /// Overlap points whose estimated normal's sign agrees between two tiles, and those
+    /// compared.
+    pub agreement: Option<(u64, u64)>,
+}
+
+/// Whether a run over `points` points fits in `budget` bytes without tiles.
+pub fn fits_in_memory(points: u64, budget: u64) -> bool {
+    points.saturating_mul(BYTES_PER_POINT) <= budget.saturating_sub(FIXED_BYTES)
+}
+
+/// Runs `mlscurv curvature` tile by tile.
+pub fn curvature(run: &TiledRun<'_>, t: &mut Timings) -> Result<TiledSummary> {
+    let options = run.options;
+    let name = pipeline::input_name(run.input);
+    if options.adaptive {
+        bail!("{name}: --adaptive is not available for a tiled (out-of-core) run");
+    }
+    if options.at == At::Projected {
+        bail!("{name}: --at projected is not available for a tiled (out-of-core) run");
+    }
+    let s = &options.surface;
+    let jet = (options.method == Method::Jet).then(|| evaluate::jet_config(false));
+    let reader = open_reader(run.input)?;
+    let n = reader.len();
+    pipeline::check_count(usize::try_from(n).unwrap_or(usize::MAX), &name)?;
+    let from_file = match (s.normals, reader.has_normals()) {
+        (NormalsMode::File, false) => {
+            bail!("{name}: --normals file given but the file has no normals (nx, ny, nz)")
+        }
+        (NormalsMode::File | NormalsMode::Auto, true) => true,
+        _ => false,
+    };
+    let jet = jet.map(|_| evaluate::jet_config(from_file));
+    for note in reader.notes() {
+        eprintln!("mlscurv: note: {note}");
+    }
+    let (header_lo, header_hi) = reader.header_bounds();
+    let template = reader.template().clone();
+    drop(reader);
+    let capacity = run.budget.saturating_sub(FIXED_BYTES) / BYTES_PER_POINT;
+    if capacity < 1000 {
+        bail!(
+            "--memory {}: too small; a tiled run needs at least {} MiB",
+            run.budget,
+            (FIXED_BYTES + 1000 * BYTES_PER_POINT) >> 20
+        );
+    }
+
+    // 1. The box and the counts.
+    let grid = Grid::new(Vector::from(header_lo), Vector::from(header_hi), GRID_CELLS)
+        .with_context(|| format!("{name}: the header's bounding box"))?;
+    let mut counts = vec![0u64; grid.len()];
+    let (mut lo, mut hi) = (
+        Vector::repeat(f64::INFINITY),
+        Vector::repeat(f64::NEG_INFINITY),
+    );
+    t.time("scan", || {
+        for_each_chunk(run.input, false, |_, chunk| {
+            for p in &chunk.points {
+                let p = Point::from(*p);
+                counts[grid.index_of(&p)] += 1;
+                lo = lo.inf(&p.coords);
+                hi = hi.sup(&p.coords);
+            }
+            Ok(())
+        })
+    })?;
+    let frame = Frame::of_box(lo, hi);
+
+    // 2. h.
+    let scale = match s.h {
+        Some(h) => Scale {
+            h,
+            why: "given with --h".into(),
+            spacing: None,
+            factor: None,
+        },
+        None => t.time("spacing", || {
+            sampled_scale(run.input, &grid, &counts, capacity, s.h_factor, &name)
+        })?,
+    };
+    let h = scale.h;
+    let reach = tiling::reach(h, s.cutoff, jet.as_ref(), !from_file).with_context(|| {
+        format!("{name}: a tiled run needs a kernel cutoff (--cutoff none reaches every point)")
+    })?;
+    let plan = TilePlan::new(grid, &counts, reach, capacity)
+        .with_context(|| format!("{name}: --memory {} MiB", run.budget >> 20))?;
+    drop(counts);
+    let tiles = plan.tiles().len();
+
+    // Disk: the tile files (points with their halos), the results, and the output.
+    let parent = run.temp_dir.map_or_else(
+        || {
+            run.output
+                .parent()
+                .filter(|p| !p.as_os_str().is_empty())
+                .unwrap_or(Path::new("."))
+                .to_path_buf()
+        },
+        Path::to_path_buf,
+    );
+    let record = if from_file { 56 } else { 32 };
+    let loaded: u64 = plan.tiles().iter().map(|t| t.loaded).sum();
+    let needed = loaded * record + n * (RESULT_BYTES as u64 + 1) + n * 200;
+    let free = fs4::available_space(&parent)
+        .with_context(|| format!("{}: cannot measure the free disk space", parent.display()))?;
+    if free < needed {
+        bail!(
+            "{}: {:.1} GB free, but a tiled run of {n} points needs about {:.1} GB for its \
+             temporary tiles and the output; free some space or choose --temp-dir",
+            parent.display(),
+            free as f64 / 1e9,
+            needed as f64 / 1e9
+        );
+    }
+    let work = Workspace::new(&parent, run.output)?;
+
+    // 3. The tile files, in input order.
+    t.time("tiles", || -> Result<()> {
+        let mut files: Vec<BufWriter<File>> = (0..tiles)
+            .map(|i| {
+                let path = work.path(&format!("tile{i}.pts"));
+                File::create(&path)
+                    .map(|f| BufWriter::with_capacity(1 << 16, f))
+                    .with_context(|| path.display().to_string())
+            })
+            .collect::<Result<_>>()?;
+        for_each_chunk(run.input, false, |first, chunk| {
+            for (k, p) in chunk.points.iter().enumerate() {
+                let mut bytes = [0u8; 56];
+                bytes[..8].copy_from_slice(&(first + k as u64).to_le_bytes());
+                for (i, c) in p.iter().enumerate() {
+                    bytes[8 + 8 * i..16 + 8 * i].copy_from_slice(&c.to_le_bytes());
+                }
+                if let (true, Some(normals)) = (from_file, &chunk.normals) {
+                    for (i, c) in normals[k].iter().enumerate() {
+                        bytes[32 + 8 * i..40 + 8 * i].copy_from_slice(&c.to_le_bytes());
+                    }
+                }
+                let mut error = None;
+                plan.tiles_near(&Point::from(*p), |tile| {
+                    if let Err(e) = files[tile].write_all(&bytes[..record as usize]) {
+                        error = Some(e);
+                    }
+                });
+                if let Some(e) = error {
+                    return Err(e).context(work.dir.path().display().to_string());
+                }
+            }
+            Ok(())
+        })?;
+        for f in &mut files {
+            f.flush().context(work.dir.path().display().to_string())?;
+        }
+        Ok(())
+    })?;
+
+    // 4. Each tile.
+    let orientation = s.orient.unwrap_or(Orientation::Up);
+    let mut normals_source = String::new();
+    let bar = crate::progress::Bar::new(n as usize, "curvature", t.show());
+    let mut done = 0usize;
+    t.measure("curvature", || -> Result<()> {
+        for tile in 0..tiles {
+            let source = evaluate_tile(
+                &work,
+                tile,
+                &plan,
+                from_file,
+                record as usize,
+                &scale,
+                orientation,
+                s.orient.is_none(),
+                frame,
+                options,
+                jet.as_ref(),
+                &name,
+            )?;
+            if normals_source.is_empty() {
+                normals_source = source;
+            }
+            done += plan.tiles()[tile].points as usize;
+            bar.set(done);
+        }
+        Ok(())
+    })?;
+    drop(bar);
+
+    // 5. The output, in input order.
+    let mut summary = TiledSummary {
+        points: n,
+        scale,
+        normals_source,
+        tiles,
+        largest_tile: plan.tiles().iter().map(|t| t.loaded).max().unwrap_or(0),
+        load_factor: loaded as f64 / n as f64,
+        reach,
+        status: String::new(),
+        k1: Vec::new(),
+        k2: Vec::new(),
+        mean: Vec::new(),
+        gauss: Vec::new(),
+        k1_sd: Vec::new(),
+        agreement: (!from_file).then_some((0, 0)),
+    };
+    t.time("write", || {
+        write_output(run, &work, &plan, &template, &mut summary)
+    })?;
+    drop(work);
+    Ok(summary)
+}
+
+/// h from the spacing of up to [`SPACING_TILES`] tiles of [`SPACING_TILE`] points spread
+/// over the cloud (all of a cloud that small: then h is the in-memory run's), fewer if the
+/// budget's `capacity` holds fewer.
+fn sampled_scale(
+    input: &Path,
+    grid: &Grid,
+    counts: &[u64],
+    capacity: u64,
+    factor: f64,
+    name: &str,
+) -> Result<Scale> {
+    let size = SPACING_TILE.min(capacity);
+    let plan = TilePlan::new(grid.clone(), counts, 0.0, size)
+        .with_context(|| format!("{name}: planning the spacing sample"))?;
+    let tiles = plan.tiles();
+    // Every k-th tile (the plan's order follows space), as many as the budget holds.
+    let take = (capacity / size)
+        .clamp(1, SPACING_TILES)
+        .min(tiles.len() as u64) as usize;
+    let chosen: Vec<bool> = (0..tiles.len())
+        .map(|i| (i * take) / tiles.len() != ((i + 1) * take) / tiles.len())
+        .collect();
+    let mut points = Vec::new();
+    for_each_chunk(input, false, |_, chunk| {
+        for p in &chunk.points {
+            let p = Point::from(*p);
+            if chosen[plan.tile_of(&p)] {
+                points.push(p);
+            }
+        }
+        Ok(())
+    })?;
+    let par = Parallelism::Rayon;
+    let stats = spacing_statistics(&points, DEFAULT_SPACING_NEIGHBOURS, par)
+        .with_context(|| format!("{name}: cannot measure the point spacing"))?;
+    let h = suggest_h(&stats, factor)
+        .with_context(|| format!("{name}: cannot derive h from the spacing"))?;
+    Ok(Scale {
+        h,
+        why: format!(
+            "{factor} × median local spacing {:.6} over {} neighbours, of {} points in {take} \
+             of {} tiles",
+            stats.spacing,
+            stats.k,
+            points.len(),
+            tiles.len()
+        ),
+        spacing: Some(stats),
+        factor: Some(factor),
+    })
+}

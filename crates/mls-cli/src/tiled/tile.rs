@@ -1,0 +1,301 @@
+//! One tile's evaluation, and the output written from every tile's results in input order.
+
+use std::fs::File;
+use std::io::{BufReader, BufWriter, Read, Write};
+
+use anyhow::{Context, Result};
+use mls_core::normals::Orientation;
+use mls_core::tiling::TilePlan;
+use mls_core::{Frame, Parallelism, Point, PointStatus, Vector};
+use mls_io::{Column, FileFormat};
+
+use super::files::{Workspace, for_each_chunk};
+use super::{TiledRun, TiledSummary};
+use crate::evaluate::{self, CurvatureColumns};
+use crate::pipeline::{self, Scale};
+use crate::{CurvatureOptions, Method, NormalsMode};
+
+/// Bytes of a result record: 16 `f64` (normal, k1, k2, mean, gauss, d1, d2, k1_sd, k2_sd),
+/// the status and the estimated normal's code.
+pub(super) const RESULT_BYTES: usize = 16 * 8 + 4 + 1;
+
+/// The code of an estimated normal's sign for the overlap check: its largest component's
+/// axis and sign (0 for none). Two estimates of one normal from overlapping neighbourhoods are
+/// nearly parallel, so they share the axis unless it is a near tie, when they are not
+/// compared.
+fn sign_code(n: Option<&Vector>) -> u8 {
+    let Some(n) = n else { return 0 };
+    let axis = n.iamax();
+    1 + 2 * axis as u8 + u8::from(n[axis] < 0.0)
+}
+
+/// Evaluates one tile: reads its points, gets their normals, builds the surface in the
+/// whole cloud's frame, evaluates its own points and writes their results; returns the
+/// normals' description.
+#[allow(clippy::too_many_arguments)]
+pub(super) fn evaluate_tile(
+    work: &Workspace,
+    tile: usize,
+    plan: &TilePlan,
+    from_file: bool,
+    record: usize,
+    scale: &Scale,
+    orientation: Orientation,
+    default_orientation: bool,
+    frame: Frame,
+    options: &CurvatureOptions,
+    jet: Option<&mls_core::JetConfig>,
+    name: &str,
+) -> Result<String> {
+    let path = work.path(&format!("tile{tile}.pts"));
+    let mut bytes = Vec::new();
+    File::open(&path)
+        .and_then(|mut f| f.read_to_end(&mut bytes))
+        .with_context(|| path.display().to_string())?;
+    std::fs::remove_file(&path).with_context(|| path.display().to_string())?;
+    let f64_at =
+        |r: &[u8], at: usize| f64::from_le_bytes(r[at..at + 8].try_into().unwrap_or_default());
+    let count = bytes.len() / record;
+    let mut points = Vec::with_capacity(count);
+    let mut file_normals = from_file.then(|| Vec::with_capacity(count));
+    for r in bytes.chunks_exact(record) {
+        points.push(Point::new(f64_at(r, 8), f64_at(r, 16), f64_at(r, 24)));
+        if let Some(n) = &mut file_normals {
+            n.push([f64_at(r, 32), f64_at(r, 40), f64_at(r, 48)]);
+        }
+    }
+    drop(bytes);
+    let core: Vec<bool> = points.iter().map(|p| plan.tile_of(p) == tile).collect();
+    let tile_name = format!("{name} (tile {tile})");
+    let s = &options.surface;
+    let normals = pipeline::normals(
+        file_normals,
+        &points,
+        if from_file {
+            NormalsMode::File
+        } else {
+            NormalsMode::Estimate
+        },
+        Some(orientation),
+        None,
+        scale.h,
+        Parallelism::Rayon,
+        &tile_name,
+    )?;
+    let codes: Vec<u8> = normals
+        .normals
+        .iter()
+        .map(|n| sign_code(n.as_ref()))
+        .collect();
+    let mut source = normals.source.clone();
+    if !from_file && default_orientation {
+        source.push_str(" (a tiled run orients up unless --orient says otherwise)");
+    }
+    // Each tile's numbers and checks are its own: the summary names the rule, per tile.
+    let queries: Vec<Point> = points
+        .iter()
+        .zip(&core)
+        .filter_map(|(p, &c)| c.then_some(*p))
+        .collect();
+    let surface = pipeline::surface_in(
+        &points,
+        normals.normals,
+        scale.h,
+        s.cutoff,
+        frame,
+        &tile_name,
+        evaluate::curvature_surface(false),
+    )?;
+    let default_jet = mls_core::JetConfig::default();
+    let out = evaluate::curvature(
+        &queries,
+        &surface,
+        options,
+        jet.unwrap_or(&default_jet),
+        false,
+    );
+    drop(surface);
+    let path = work.path(&format!("tile{tile}.out"));
+    let mut w = BufWriter::with_capacity(
+        1 << 16,
+        File::create(&path).with_context(|| path.display().to_string())?,
+    );
+    let core_codes = codes
+        .iter()
+        .zip(&core)
+        .filter_map(|(c, &k)| k.then_some(*c));
+    for (i, code) in core_codes.enumerate() {
+        let mut r = [0u8; RESULT_BYTES];
+        let sd = |v: &Vec<f64>| v.get(i).copied().unwrap_or(f64::NAN);
+        let values = [
+            out.normal[i][0],
+            out.normal[i][1],
+            out.normal[i][2],
+            out.k1[i],
+            out.k2[i],
+            out.mean[i],
+            out.gauss[i],
+            out.d1[i][0],
+            out.d1[i][1],
+            out.d1[i][2],
+            out.d2[i][0],
+            out.d2[i][1],
+            out.d2[i][2],
+            sd(&out.k1_sd),
+            sd(&out.k2_sd),
+            f64::NAN,
+        ];
+        for (j, v) in values.iter().enumerate() {
+            r[8 * j..8 * j + 8].copy_from_slice(&v.to_le_bytes());
+        }
+        r[128..132].copy_from_slice(&out.status[i].to_le_bytes());
+        r[132] = code;
+        w.write_all(&r)
+            .with_context(|| path.display().to_string())?;
+    }
+    w.flush().with_context(|| path.display().to_string())?;
+    if !from_file {
+        // The halo points' signs, in input order, for the overlap check.
+        let path = work.path(&format!("tile{tile}.halo"));
+        let halo: Vec<u8> = codes
+            .iter()
+            .zip(&core)
+            .filter_map(|(c, &k)| (!k).then_some(*c))
+            .collect();
+        std::fs::write(&path, halo).with_context(|| path.display().to_string())?;
+    }
+    Ok(source)
+}
+
+/// Reads the input again and writes each point with its tile's next result.
+pub(super) fn write_output(
+    run: &TiledRun<'_>,
+    work: &Workspace,
+    plan: &TilePlan,
+    template: &mls_io::LasTemplate,
+    summary: &mut TiledSummary,
+) -> Result<()> {
+    let tiles = plan.tiles().len();
+    let open = |suffix: &str| -> Result<Vec<BufReader<File>>> {
+        (0..tiles)
+            .map(|i| {
+                let path = work.path(&format!("tile{i}.{suffix}"));
+                File::open(&path)
+                    .map(|f| BufReader::with_capacity(1 << 16, f))
+                    .with_context(|| path.display().to_string())
+            })
+            .collect()
+    };
+    let mut results = open("out")?;
+    let mut halos = if summary.agreement.is_some() {
+        Some(open("halo")?)
+    } else {
+        None
+    };
+    let jet = run.options.method == Method::Jet;
+    let stride = (summary.points / 1_000_000).max(1);
+    let mut counts = vec![0u64; PointStatus::ALL.len() + 1];
+    let mut renamed: Option<Vec<String>> = None;
+    let compressed = run.format == FileFormat::Laz;
+    mls_io::write_las_chunks(run.output, compressed, template, |sink| -> Result<()> {
+        for_each_chunk(run.input, run.keep_attributes, |first, chunk| {
+            let m = chunk.points.len();
+            let mut out = CurvatureColumns::with_capacity(m, run.options);
+            for (k, p) in chunk.points.iter().enumerate() {
+                let p = Point::from(*p);
+                let own = plan.tile_of(&p);
+                let mut r = [0u8; RESULT_BYTES];
+                results[own]
+                    .read_exact(&mut r)
+                    .context("a tile's results end early")?;
+                let v = |j: usize| {
+                    f64::from_le_bytes(r[8 * j..8 * j + 8].try_into().unwrap_or_default())
+                };
+                out.normal.push([v(0), v(1), v(2)]);
+                out.k1.push(v(3));
+                out.k2.push(v(4));
+                out.mean.push(v(5));
+                out.gauss.push(v(6));
+                out.d1.push([v(7), v(8), v(9)]);
+                out.d2.push([v(10), v(11), v(12)]);
+                if jet {
+                    out.k1_sd.push(v(13));
+                    out.k2_sd.push(v(14));
+                }
+                let status = i32::from_le_bytes(r[128..132].try_into().unwrap_or_default());
+                out.status.push(status);
+                let slot = if status == 0 {
+                    0
+                } else {
+                    PointStatus::ALL
+                        .iter()
+                        .position(|s| i32::from(s.code()) == status)
+                        .map_or(0, |i| i + 1)
+                };
+                counts[slot] += 1;
+                if (first + k as u64).is_multiple_of(stride) {
+                    summary.k1.push(v(3));
+                    summary.k2.push(v(4));
+                    summary.mean.push(v(5));
+                    summary.gauss.push(v(6));
+                    summary.k1_sd.push(v(13));
+                }
+                if let (Some(halos), Some((agree, compared))) =
+                    (halos.as_mut(), summary.agreement.as_mut())
+                {
+                    let mine = r[132];
+                    let mut error = None;
+                    plan.tiles_near(&p, |t| {
+                        if t == own {
+                            return;
+                        }
+                        let mut b = [0u8];
+                        if let Err(e) = halos[t].read_exact(&mut b) {
+                            error = Some(e);
+                        }
+                        // Same axis: compare the signs.
+                        if mine != 0 && b[0] != 0 && (mine - 1) / 2 == (b[0] - 1) / 2 {
+                            *compared += 1;
+                            *agree += u64::from(mine == b[0]);
+                        }
+                    });
+                    if let Some(e) = error {
+                        return Err(e).context("a tile's overlap signs end early");
+                    }
+                }
+            }
+            let positions = &chunk.points;
+            let columns = out.columns(positions);
+            let mut attributes = chunk.attributes.clone();
+            if !run.keep_attributes {
+                attributes.clear();
+            }
+            // The same names as an in-memory run gives them (`k1` → `k1_in`), noted once.
+            let names = renamed.get_or_insert_with(|| {
+                let mut carried = pipeline::Carried::new(attributes.clone(), None, true);
+                carried.rename_clashes(&columns, run.input);
+                carried.attributes.into_iter().map(|a| a.name).collect()
+            });
+            for (a, name) in attributes.iter_mut().zip(names.iter()) {
+                a.name.clone_from(name);
+            }
+            let carried = pipeline::Carried::new(attributes, None, true);
+            let columns: Vec<Column<'_>> = carried.insert(columns, 6);
+            sink.write(&columns)?;
+            Ok(())
+        })
+    })?;
+    summary.status = status_text(&counts);
+    Ok(())
+}
+
+/// The status counts (ok, then [`PointStatus::ALL`]) as [`pipeline::status_counts`] words them.
+fn status_text(counts: &[u64]) -> String {
+    let mut parts = vec![format!("ok {}", counts[0])];
+    for (s, &c) in PointStatus::ALL.iter().zip(&counts[1..]) {
+        if c > 0 {
+            parts.push(format!("{} {c}", s.name()));
+        }
+    }
+    parts.join(", ")
+}
