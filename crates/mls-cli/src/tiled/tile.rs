@@ -29,6 +29,89 @@ fn sign_code(n: Option<&Vector>) -> u8 {
     1 + 2 * axis as u8 + u8::from(n[axis] < 0.0)
 }
 
+/// The results of one tile's own points.
+#[derive(Debug)]
+pub struct TileResult {
+    /// The curvature columns of the tile's own points, in their order.
+    pub columns: CurvatureColumns,
+    /// The sign code of every loaded point's estimated normal (see [`sign_code`]), for the
+    /// overlap check.
+    pub codes: Vec<u8>,
+    /// Where the normals came from, for the summary.
+    pub source: String,
+}
+
+/// The curvature at the tile's own points (`core`) of the surface of all its `points` (its
+/// own and its halo), built in the whole cloud's `frame` with scale `h`: the step of a tiled
+/// run that needs no file, shared by the binary's out-of-core path and the Python package's
+/// Dask runner. `file_normals`, if given, are the points' normals; otherwise normals are
+/// estimated and oriented by `orientation` over the tile.
+///
+/// With the file's normals, every own point's results are bitwise those of one run over the
+/// whole cloud, provided the tile holds every point within [`mls_core::tiling::reach`] of
+/// its own points.
+#[allow(clippy::too_many_arguments)]
+pub fn tile_curvature(
+    points: &[Point],
+    file_normals: Option<Vec<[f64; 3]>>,
+    core: &[bool],
+    h: f64,
+    orientation: Orientation,
+    frame: Frame,
+    options: &CurvatureOptions,
+    jet: Option<&mls_core::JetConfig>,
+    name: &str,
+) -> Result<TileResult> {
+    let from_file = file_normals.is_some();
+    let s = &options.surface;
+    let normals = pipeline::normals(
+        file_normals,
+        points,
+        if from_file {
+            NormalsMode::File
+        } else {
+            NormalsMode::Estimate
+        },
+        Some(orientation),
+        None,
+        h,
+        Parallelism::Rayon,
+        name,
+    )?;
+    let codes: Vec<u8> = normals
+        .normals
+        .iter()
+        .map(|n| sign_code(n.as_ref()))
+        .collect();
+    let queries: Vec<Point> = points
+        .iter()
+        .zip(core)
+        .filter_map(|(p, &c)| c.then_some(*p))
+        .collect();
+    let surface = pipeline::surface_in(
+        points,
+        normals.normals,
+        h,
+        s.cutoff,
+        frame,
+        name,
+        evaluate::curvature_surface(false),
+    )?;
+    let default_jet = evaluate::jet_config(from_file);
+    let columns = evaluate::curvature(
+        &queries,
+        &surface,
+        options,
+        jet.unwrap_or(&default_jet),
+        false,
+    );
+    Ok(TileResult {
+        columns,
+        codes,
+        source: normals.source,
+    })
+}
+
 /// Evaluates one tile: reads its points, gets their normals, builds the surface in the
 /// whole cloud's frame, evaluates its own points and writes their results; returns the
 /// normals' description.
@@ -67,54 +150,24 @@ pub(super) fn evaluate_tile(
     drop(bytes);
     let core: Vec<bool> = points.iter().map(|p| plan.tile_of(p) == tile).collect();
     let tile_name = format!("{name} (tile {tile})");
-    let s = &options.surface;
-    let normals = pipeline::normals(
-        file_normals,
+    let TileResult {
+        columns: out,
+        codes,
+        mut source,
+    } = tile_curvature(
         &points,
-        if from_file {
-            NormalsMode::File
-        } else {
-            NormalsMode::Estimate
-        },
-        Some(orientation),
-        None,
+        file_normals,
+        &core,
         scale.h,
-        Parallelism::Rayon,
+        orientation,
+        frame,
+        options,
+        jet,
         &tile_name,
     )?;
-    let codes: Vec<u8> = normals
-        .normals
-        .iter()
-        .map(|n| sign_code(n.as_ref()))
-        .collect();
-    let mut source = normals.source.clone();
     if !from_file && default_orientation {
         source.push_str(" (a tiled run orients up unless --orient says otherwise)");
     }
-    // Each tile's numbers and checks are its own: the summary names the rule, per tile.
-    let queries: Vec<Point> = points
-        .iter()
-        .zip(&core)
-        .filter_map(|(p, &c)| c.then_some(*p))
-        .collect();
-    let surface = pipeline::surface_in(
-        &points,
-        normals.normals,
-        scale.h,
-        s.cutoff,
-        frame,
-        &tile_name,
-        evaluate::curvature_surface(false),
-    )?;
-    let default_jet = mls_core::JetConfig::default();
-    let out = evaluate::curvature(
-        &queries,
-        &surface,
-        options,
-        jet.unwrap_or(&default_jet),
-        false,
-    );
-    drop(surface);
     let path = work.path(&format!("tile{tile}.out"));
     let mut w = BufWriter::with_capacity(
         1 << 16,
