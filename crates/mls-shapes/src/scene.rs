@@ -404,8 +404,8 @@ impl Scene {
         };
         for i in cells(a.x, b.x) {
             for j in cells(a.y, b.y) {
-                let cell = Cell::new(self.config.seed, &self.terrain, i, j);
-                cell.intersect(ray, hash3(self.config.seed, SALT_CROWN, index), &mut best);
+                let key = hash3(self.config.seed, SALT_CROWN, index);
+                intersect_cell(self.config.seed, &self.terrain, (i, j), ray, key, &mut best);
             }
         }
         best
@@ -601,11 +601,9 @@ impl Terrain {
     fn intersect(&self, origin: &Point, d: &Vector, lo: f64, hi: f64) -> (f64, f64, f64) {
         let (mut lo, mut hi) = (lo, hi);
         let mut t = 0.5 * (lo + hi);
-        let mut grad = (0.0, 0.0);
         for _ in 0..60 {
             let p = origin + d * t;
             let (h, gx, gy) = self.at(p.x, p.y);
-            grad = (gx, gy);
             let f = p.z - h;
             if f.abs() < 1e-10 {
                 break;
@@ -623,49 +621,36 @@ impl Terrain {
                 0.5 * (lo + hi)
             };
         }
-        (t, grad.0, grad.1)
+        // The gradient where the search stopped, which the last step may have moved.
+        let p = origin + d * t;
+        let (_, gx, gy) = self.at(p.x, p.y);
+        (t, gx, gy)
     }
 }
 
-/// What stands in one cell.
-#[derive(Clone, Debug)]
-enum Cell {
-    Empty,
-    Building(Building),
-    Trees(Vec<Tree>),
-}
-
-impl Cell {
-    /// The content of cell `(i, j)`, drawn from a hash of the seed and the indices.
-    fn new(seed: u64, terrain: &Terrain, i: i64, j: i64) -> Self {
-        let mut draws = Draws::new(hash3(hash3(seed, SALT_CELL, i as u64), SALT_CELL, j as u64));
-        let x0 = i as f64 * CELL_SIZE;
-        let y0 = j as f64 * CELL_SIZE;
-        let kind = draws.unit();
-        if kind < 0.35 {
-            Self::Building(Building::new(&mut draws, terrain, x0, y0))
-        } else if kind < 0.8 {
-            // A copse of 3 to 14 trees.
-            let count = 3 + (draws.unit() * 12.0) as usize;
-            Self::Trees(
-                (0..count)
-                    .map(|_| Tree::new(&mut draws, terrain, x0, y0))
-                    .collect(),
-            )
-        } else {
-            Self::Empty
-        }
-    }
-
-    fn intersect(&self, ray: &Ray, crown_key: u64, best: &mut Hit) {
-        match self {
-            Self::Empty => {}
-            Self::Building(b) => b.intersect(ray, best),
-            Self::Trees(trees) => {
-                for (n, tree) in trees.iter().enumerate() {
-                    tree.intersect(ray, hash3(crown_key, SALT_CROWN, n as u64), best);
-                }
-            }
+/// Draws what stands in cell `(i, j)` (one building, a copse of trees, or nothing) from a
+/// hash of the seed and the indices, and offers its hits along `ray` to `best`. Drawing the
+/// content per ray costs a few hashes and no allocation, and no scene is ever stored.
+fn intersect_cell(
+    seed: u64,
+    terrain: &Terrain,
+    (i, j): (i64, i64),
+    ray: &Ray,
+    key: u64,
+    best: &mut Hit,
+) {
+    let mut draws = Draws::new(hash3(hash3(seed, SALT_CELL, i as u64), SALT_CELL, j as u64));
+    let x0 = i as f64 * CELL_SIZE;
+    let y0 = j as f64 * CELL_SIZE;
+    let kind = draws.unit();
+    if kind < 0.35 {
+        Building::new(&mut draws, terrain, x0, y0).intersect(ray, best);
+    } else if kind < 0.8 {
+        // A copse of 3 to 14 trees.
+        let count = 3 + (draws.unit() * 12.0) as u64;
+        for n in 0..count {
+            let tree = Tree::new(&mut draws, terrain, x0, y0);
+            tree.intersect(ray, hash3(key, SALT_CROWN, n), best);
         }
     }
 }
