@@ -185,10 +185,13 @@ pub(crate) fn run(options: &Options) -> Result<()> {
         return Err(e);
     }
     let mut files = Vec::with_capacity(tiles.len());
-    for mut tile in tiles {
-        tile.writer
-            .close()
-            .with_context(|| format!("cannot finish {}", tile.path.display()))?;
+    let mut open_tiles = tiles.into_iter();
+    while let Some(mut tile) = open_tiles.next() {
+        if let Err(e) = tile.writer.close() {
+            let message = format!("cannot finish {}", tile.path.display());
+            abandon(std::iter::once(tile).chain(open_tiles).collect());
+            return Err(e).context(message);
+        }
         files.push((tile.path, tile.points));
     }
     let seconds = start.elapsed().as_secs_f64();
@@ -201,7 +204,7 @@ pub(crate) fn run(options: &Options) -> Result<()> {
         ),
     };
     println!(
-        "gen-cloud: {} points ({} strips, seed {}, noise {} m{}), area {:.1} m × {:.1} m at ({:.1}, {:.1}), {named}, {seconds:.2} s ({:.0} points/s)",
+        "gen-cloud: {} points ({} strip(s), seed {}, noise {} m{}), area {:.1} m × {:.1} m at ({:.1}, {:.1}), {named}, {seconds:.2} s ({:.0} points/s)",
         scene.len(),
         scene.strips(),
         options.seed,
