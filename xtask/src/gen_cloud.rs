@@ -198,9 +198,11 @@ pub(crate) fn run(options: &Options) -> Result<()> {
     let named = match files.as_slice() {
         [(path, _)] => path.display().to_string(),
         _ => format!(
-            "{} files {}_r*_c*",
+            "{} files {}_r*_c* ({} to {} points each)",
             files.len(),
-            options.output.with_extension("").display()
+            options.output.with_extension("").display(),
+            files.iter().map(|f| f.1).min().unwrap_or(0),
+            files.iter().map(|f| f.1).max().unwrap_or(0),
         ),
     };
     println!(
