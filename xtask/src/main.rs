@@ -9,6 +9,7 @@ mod accuracy;
 mod bench;
 mod defaults;
 mod faults;
+mod gen_cloud;
 mod paper;
 mod robustness;
 mod validate;
@@ -45,10 +46,17 @@ Tasks:
   accuracy-explore [CLOUD]
                  The same clouds with several jet settings, printed (for studies); with
                  JET_DIAG=1 also the make-up of the predicted error by decile.
+  gen-cloud --points N -o OUT.las|OUT.laz [--seed S] [--noise SIGMA] [--normals] [--tiles RxC]
+                 A seeded airborne-LiDAR test cloud (terrain, buildings, trees, scan strips) of
+                 exactly N points, streamed as LAS 1.4 point format 6 or LAZ; --normals adds the
+                 true normals as f64 extra bytes nx ny nz; --tiles writes OUT_r{i}_c{j}.laz.
+                 A relative OUT is taken from the directory the task was run from.
   ci             fmt --check, clippy -D warnings, tests, validate --quick.";
 
 fn main() -> Result<()> {
     let args: Vec<String> = std::env::args().skip(1).collect();
+    // Outputs named on the command line are relative to where the task was run.
+    let invoked_from = std::env::current_dir().context("cannot read the current directory")?;
     std::env::set_current_dir(project_root()).context("cannot change to the project root")?;
     let Some(task) = args.first() else {
         println!("{TASKS}");
@@ -68,6 +76,7 @@ fn main() -> Result<()> {
         "bench" => bench::run(rest),
         "defaults" => defaults::run(),
         "paper" => paper::run(&paper::Options::parse(rest)?),
+        "gen-cloud" => gen_cloud::run(&gen_cloud::Options::parse(rest, &invoked_from)?),
         "ci" => ci(),
         other => bail!("unknown task `{other}`\n{TASKS}"),
     }

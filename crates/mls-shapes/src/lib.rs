@@ -34,6 +34,7 @@ mod math;
 mod noise;
 mod parametric;
 mod sampling;
+pub mod scene;
 pub mod shapes;
 mod surface_point;
 
@@ -48,6 +49,7 @@ pub use sampling::{
     Sample, fibonacci_sphere, grid, jittered_grid, normals, points, random, random_area_uniform,
     surface_points,
 };
+pub use scene::{Area, Scan, Scene, SceneConfig, SceneError, ScenePoint, SurfaceClass};
 pub use shapes::{
     BSplineBasis, BSplineSurface, Bump, Cylinder, Ellipsoid, HeightField, HeightFieldConfig,
     Saddle, Sphere, Torus, Wave,
