@@ -225,7 +225,14 @@ pub(crate) fn run(args: &[String]) -> Result<()> {
         load_after,
         elapsed: started.elapsed(),
     };
-    let md = render(&env, &stages, &cutoffs, &threads, &ad, &cli);
+    let mut md = render(&env, &stages, &cutoffs, &threads, &ad, &cli);
+    if !quick {
+        // bench-tiled's section is kept: it takes much longer to measure.
+        let old = std::fs::read_to_string("docs/benchmarks.md").unwrap_or_default();
+        if let Some(section) = crate::bench_tiled::section(&old) {
+            md = crate::bench_tiled::replace_section(&md, section);
+        }
+    }
     let out = if quick {
         work.join("quick.md")
     } else {
@@ -735,7 +742,7 @@ fn cli_measurements_inner(exe: &Path, cloud: &Cloud, work: &Path, profile: bool)
 }
 
 /// Builds the release `mlscurv` and returns its path (from cargo's JSON messages).
-fn build_mlscurv() -> Result<PathBuf> {
+pub(crate) fn build_mlscurv() -> Result<PathBuf> {
     let output = crate::cargo()
         .args([
             "build",
@@ -948,12 +955,12 @@ struct Environment {
 }
 
 /// Where cargo builds: `CARGO_TARGET_DIR` or `target`.
-fn target_dir() -> PathBuf {
+pub(crate) fn target_dir() -> PathBuf {
     std::env::var_os("CARGO_TARGET_DIR").map_or_else(|| PathBuf::from("target"), PathBuf::from)
 }
 
 /// The 1, 5 and 15 minute load averages.
-fn load_average() -> String {
+pub(crate) fn load_average() -> String {
     std::fs::read_to_string("/proc/loadavg")
         .ok()
         .map(|s| s.split_whitespace().take(3).collect::<Vec<_>>().join(", "))
@@ -961,7 +968,7 @@ fn load_average() -> String {
 }
 
 /// CPU model, logical CPU count, MHz and total memory from /proc.
-fn machine() -> String {
+pub(crate) fn machine() -> String {
     let cpuinfo = std::fs::read_to_string("/proc/cpuinfo").unwrap_or_default();
     let field = |name: &str| {
         cpuinfo.lines().find_map(|l| {
@@ -999,7 +1006,7 @@ fn machine() -> String {
 }
 
 /// Today's date (UTC) from the system clock, `YYYY-MM-DD HH:MM UTC`.
-fn now_utc() -> String {
+pub(crate) fn now_utc() -> String {
     let secs = SystemTime::now()
         .duration_since(UNIX_EPOCH)
         .map_or(0, |d| d.as_secs());

@@ -7,6 +7,7 @@ use anyhow::{Context, Result, bail};
 
 mod accuracy;
 mod bench;
+mod bench_tiled;
 mod defaults;
 mod faults;
 mod gen_cloud;
@@ -35,6 +36,10 @@ Tasks:
                  cargo-fuzz reader target for SECONDS. Writes target/robustness/report.md.
   bench [--quick] Throughput, memory and scaling against issue 5's targets; writes
                  docs/benchmarks.md. --quick: small clouds, writes target/bench/quick.md.
+  bench-tiled [--quick] [--points N] [--memory SIZE]
+                 Clouds larger than memory: gen-cloud clouds of N/10, N/3 and N points
+                 (default 10^8) tiled in SIZE (default 2GiB) against in-memory runs, the jet
+                 tiled, LAZ read + write; writes the out-of-core section of docs/benchmarks.md.
   defaults       The measurements behind mlscurv's defaults (--h-factor, --at); writes docs/defaults.md.
   paper [--quick] [--check]
                  The paper's Tables 1-2, Figure 8, h and cutoff studies, adaptive h and figures;
@@ -74,6 +79,7 @@ fn main() -> Result<()> {
         "faults" => faults::run(rest),
         "robustness" => robustness::run(&robustness::Options::parse(rest)?),
         "bench" => bench::run(rest),
+        "bench-tiled" => bench_tiled::run(rest),
         "defaults" => defaults::run(),
         "paper" => paper::run(&paper::Options::parse(rest)?),
         "gen-cloud" => gen_cloud::run(&gen_cloud::Options::parse(rest, &invoked_from)?),
