@@ -1,6 +1,8 @@
 //! The files of a tiled run: sizes and memory, the temporary directory (removed on Ctrl-C),
 //! and the input read chunk by chunk.
 
+use std::fs::{File, OpenOptions};
+use std::io::{BufReader, BufWriter, Read, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 
@@ -139,5 +141,163 @@ pub(super) fn for_each_chunk(
         }
         f(first, &chunk)?;
         first += n as u64;
+    }
+}
+
+/// At most this many tile files are open at once: a cloud of 10¹⁰ points in 2 GiB has
+/// thousands of tiles, beyond the usual limit of 1,024 open files. Input order (scan lines)
+/// visits few tiles at a time, so the least recently used file is the one to close.
+const MAX_OPEN: usize = 256;
+
+/// The index of the least recently used open file, to close.
+fn least_recent<T>(open: &[Option<T>], stamp: &[u64]) -> Option<usize> {
+    (0..open.len())
+        .filter(|&i| open[i].is_some())
+        .min_by_key(|&i| stamp[i])
+}
+
+/// Appends to one file per tile, at most [`MAX_OPEN`] open at once.
+pub(super) struct TileWriters {
+    paths: Vec<PathBuf>,
+    open: Vec<Option<BufWriter<File>>>,
+    stamp: Vec<u64>,
+    clock: u64,
+    count: usize,
+}
+
+impl TileWriters {
+    /// Creates (empty) the files at `paths`.
+    pub(super) fn create(paths: Vec<PathBuf>) -> Result<Self> {
+        for p in &paths {
+            File::create(p).with_context(|| p.display().to_string())?;
+        }
+        let n = paths.len();
+        Ok(Self {
+            paths,
+            open: (0..n).map(|_| None).collect(),
+            stamp: vec![0; n],
+            clock: 0,
+            count: 0,
+        })
+    }
+
+    /// Appends `bytes` to tile `tile`'s file.
+    pub(super) fn write(&mut self, tile: usize, bytes: &[u8]) -> Result<()> {
+        self.clock += 1;
+        self.stamp[tile] = self.clock;
+        if self.open[tile].is_none() {
+            if self.count == MAX_OPEN
+                && let Some(i) = least_recent(&self.open, &self.stamp)
+                && let Some(mut w) = self.open[i].take()
+            {
+                w.flush()
+                    .with_context(|| self.paths[i].display().to_string())?;
+                self.count -= 1;
+            }
+            let path = &self.paths[tile];
+            let file = OpenOptions::new()
+                .append(true)
+                .open(path)
+                .with_context(|| path.display().to_string())?;
+            self.open[tile] = Some(BufWriter::with_capacity(1 << 16, file));
+            self.count += 1;
+        }
+        if let Some(w) = self.open[tile].as_mut() {
+            w.write_all(bytes)
+                .with_context(|| self.paths[tile].display().to_string())?;
+        }
+        Ok(())
+    }
+
+    /// Flushes every open file.
+    pub(super) fn finish(mut self) -> Result<()> {
+        for (w, path) in self.open.iter_mut().zip(&self.paths) {
+            if let Some(w) = w {
+                w.flush().with_context(|| path.display().to_string())?;
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Reads one file per tile front to back, at most [`MAX_OPEN`] open at once (a closed one is
+/// reopened where it was left).
+pub(super) struct TileReaders {
+    paths: Vec<PathBuf>,
+    offsets: Vec<u64>,
+    open: Vec<Option<BufReader<File>>>,
+    stamp: Vec<u64>,
+    clock: u64,
+    count: usize,
+}
+
+impl TileReaders {
+    pub(super) fn new(paths: Vec<PathBuf>) -> Self {
+        let n = paths.len();
+        Self {
+            paths,
+            offsets: vec![0; n],
+            open: (0..n).map(|_| None).collect(),
+            stamp: vec![0; n],
+            clock: 0,
+            count: 0,
+        }
+    }
+
+    /// Fills `buf` from tile `tile`'s file.
+    pub(super) fn read_exact(&mut self, tile: usize, buf: &mut [u8]) -> Result<()> {
+        self.clock += 1;
+        self.stamp[tile] = self.clock;
+        if self.open[tile].is_none() {
+            if self.count == MAX_OPEN
+                && let Some(i) = least_recent(&self.open, &self.stamp)
+            {
+                self.open[i] = None;
+                self.count -= 1;
+            }
+            let path = &self.paths[tile];
+            let mut file = File::open(path).with_context(|| path.display().to_string())?;
+            file.seek(SeekFrom::Start(self.offsets[tile]))
+                .with_context(|| path.display().to_string())?;
+            self.open[tile] = Some(BufReader::with_capacity(1 << 16, file));
+            self.count += 1;
+        }
+        if let Some(r) = self.open[tile].as_mut() {
+            r.read_exact(buf).with_context(|| {
+                format!("{}: a tile's file ends early", self.paths[tile].display())
+            })?;
+        }
+        self.offsets[tile] += buf.len() as u64;
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// More tiles than may be open: records written and read back interleaved, in an order
+    /// that closes and reopens files, come back whole and in order.
+    #[test]
+    fn more_tiles_than_open_files_round_trip() {
+        let dir = tempfile::tempdir().unwrap();
+        let tiles = MAX_OPEN * 2 + 7;
+        let paths: Vec<PathBuf> = (0..tiles)
+            .map(|i| dir.path().join(format!("{i}")))
+            .collect();
+        let order = |k: usize| (k * 7919) % tiles;
+        let mut w = TileWriters::create(paths.clone()).unwrap();
+        for k in 0..tiles * 5 {
+            w.write(order(k), &(k as u64).to_le_bytes()).unwrap();
+        }
+        w.finish().unwrap();
+        let mut r = TileReaders::new(paths);
+        for k in 0..tiles * 5 {
+            let mut b = [0u8; 8];
+            r.read_exact(order(k), &mut b).unwrap();
+            assert_eq!(u64::from_le_bytes(b), k as u64);
+        }
+        let mut b = [0u8; 8];
+        assert!(r.read_exact(0, &mut b).is_err(), "a file read past its end");
     }
 }

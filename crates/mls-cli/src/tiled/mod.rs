@@ -22,8 +22,6 @@
 mod files;
 mod tile;
 
-use std::fs::File;
-use std::io::{BufWriter, Write};
 use std::path::Path;
 
 use anyhow::{Context, Result, bail};
@@ -32,7 +30,7 @@ use mls_core::tiling::{self, Grid, TilePlan};
 use mls_core::{Frame, Parallelism, Point, Vector};
 use mls_io::FileFormat;
 
-use files::{Workspace, for_each_chunk, open_reader};
+use files::{TileWriters, Workspace, for_each_chunk, open_reader};
 pub use files::{available_memory, parse_size};
 use tile::{RESULT_BYTES, evaluate_tile, write_output};
 pub use tile::{TileResult, tile_curvature};
@@ -141,8 +139,8 @@ pub fn curvature(run: &TiledRun<'_>, t: &mut Timings) -> Result<TiledSummary> {
     let capacity = run.budget.saturating_sub(FIXED_BYTES) / BYTES_PER_POINT;
     if capacity < 1000 {
         bail!(
-            "--memory {}: too small; a tiled run needs at least {} MiB",
-            run.budget,
+            "--memory {} MiB: too small; a tiled run needs at least {} MiB",
+            run.budget >> 20,
             (FIXED_BYTES + 1000 * BYTES_PER_POINT) >> 20
         );
     }
@@ -218,14 +216,11 @@ pub fn curvature(run: &TiledRun<'_>, t: &mut Timings) -> Result<TiledSummary> {
 
     // 3. The tile files, in input order.
     t.time("tiles", || -> Result<()> {
-        let mut files: Vec<BufWriter<File>> = (0..tiles)
-            .map(|i| {
-                let path = work.path(&format!("tile{i}.pts"));
-                File::create(&path)
-                    .map(|f| BufWriter::with_capacity(1 << 16, f))
-                    .with_context(|| path.display().to_string())
-            })
-            .collect::<Result<_>>()?;
+        let mut files = TileWriters::create(
+            (0..tiles)
+                .map(|i| work.path(&format!("tile{i}.pts")))
+                .collect(),
+        )?;
         for_each_chunk(run.input, false, |first, chunk| {
             for (k, p) in chunk.points.iter().enumerate() {
                 let mut bytes = [0u8; 56];
@@ -240,20 +235,17 @@ pub fn curvature(run: &TiledRun<'_>, t: &mut Timings) -> Result<TiledSummary> {
                 }
                 let mut error = None;
                 plan.tiles_near(&Point::from(*p), |tile| {
-                    if let Err(e) = files[tile].write_all(&bytes[..record as usize]) {
-                        error = Some(e);
+                    if let Err(e) = files.write(tile, &bytes[..record as usize]) {
+                        error = error.take().or(Some(e));
                     }
                 });
                 if let Some(e) = error {
-                    return Err(e).context(work.dir.path().display().to_string());
+                    return Err(e);
                 }
             }
             Ok(())
         })?;
-        for f in &mut files {
-            f.flush().context(work.dir.path().display().to_string())?;
-        }
-        Ok(())
+        files.finish()
     })?;
 
     // 4. Each tile.

@@ -1,7 +1,7 @@
 //! One tile's evaluation, and the output written from every tile's results in input order.
 
 use std::fs::File;
-use std::io::{BufReader, BufWriter, Read, Write};
+use std::io::{BufWriter, Read, Write};
 
 use anyhow::{Context, Result};
 use mls_core::normals::Orientation;
@@ -9,7 +9,7 @@ use mls_core::tiling::TilePlan;
 use mls_core::{Frame, Parallelism, Point, PointStatus, Vector};
 use mls_io::{Column, FileFormat};
 
-use super::files::{Workspace, for_each_chunk};
+use super::files::{TileReaders, Workspace, for_each_chunk};
 use super::{TiledRun, TiledSummary};
 use crate::evaluate::{self, CurvatureColumns};
 use crate::pipeline::{self, Scale};
@@ -229,22 +229,15 @@ pub(super) fn write_output(
     summary: &mut TiledSummary,
 ) -> Result<()> {
     let tiles = plan.tiles().len();
-    let open = |suffix: &str| -> Result<Vec<BufReader<File>>> {
-        (0..tiles)
-            .map(|i| {
-                let path = work.path(&format!("tile{i}.{suffix}"));
-                File::open(&path)
-                    .map(|f| BufReader::with_capacity(1 << 16, f))
-                    .with_context(|| path.display().to_string())
-            })
-            .collect()
+    let open = |suffix: &str| {
+        TileReaders::new(
+            (0..tiles)
+                .map(|i| work.path(&format!("tile{i}.{suffix}")))
+                .collect(),
+        )
     };
-    let mut results = open("out")?;
-    let mut halos = if summary.agreement.is_some() {
-        Some(open("halo")?)
-    } else {
-        None
-    };
+    let mut results = open("out");
+    let mut halos = summary.agreement.is_some().then(|| open("halo"));
     let jet = run.options.method == Method::Jet;
     let stride = (summary.points / 1_000_000).max(1);
     let mut counts = vec![0u64; PointStatus::ALL.len() + 1];
@@ -258,9 +251,7 @@ pub(super) fn write_output(
                 let p = Point::from(*p);
                 let own = plan.tile_of(&p);
                 let mut r = [0u8; RESULT_BYTES];
-                results[own]
-                    .read_exact(&mut r)
-                    .context("a tile's results end early")?;
+                results.read_exact(own, &mut r)?;
                 let v = |j: usize| {
                     f64::from_le_bytes(r[8 * j..8 * j + 8].try_into().unwrap_or_default())
                 };
@@ -303,8 +294,8 @@ pub(super) fn write_output(
                             return;
                         }
                         let mut b = [0u8];
-                        if let Err(e) = halos[t].read_exact(&mut b) {
-                            error = Some(e);
+                        if let Err(e) = halos.read_exact(t, &mut b) {
+                            error = error.take().or(Some(e));
                         }
                         // Same axis: compare the signs.
                         if mine != 0 && b[0] != 0 && (mine - 1) / 2 == (b[0] - 1) / 2 {
@@ -313,7 +304,7 @@ pub(super) fn write_output(
                         }
                     });
                     if let Some(e) = error {
-                        return Err(e).context("a tile's overlap signs end early");
+                        return Err(e);
                     }
                 }
             }
