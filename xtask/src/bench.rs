@@ -536,12 +536,12 @@ fn io_measurements(cloud: &Cloud, results: &[PointResult], work: &Path) -> Resul
 
 /// Sustained f64 multiply + add rate of one core (FLOP/s of its CPU time, so that other
 /// processes do not lower it), compiled for the instruction set that mls-core's per-sample
-/// loops run with ([`mls_core::field::kernel_isa`]: AVX2, four f64 lanes, or the x86-64
+/// loops run with ([`mls_core::kernels::kernel_isa`]: AVX2, four f64 lanes, or the x86-64
 /// baseline SSE2, two lanes; neither fuses multiply and add): the best of 16 and 32
 /// independent accumulators, as how well the compiler vectorises and schedules each varies.
 fn peak_flops() -> f64 {
     #[cfg(target_arch = "x86_64")]
-    if mls_core::field::kernel_isa() == "avx2" {
+    if mls_core::kernels::kernel_isa() == "avx2" {
         return peak_avx2::<16>().max(peak_avx2::<32>());
     }
     peak_baseline::<16>().max(peak_baseline::<32>())
@@ -1168,7 +1168,7 @@ fn render(
         thousands(sz.large as f64),
         mls_bench::TORUS_MAJOR,
         mls_bench::TORUS_MINOR,
-        isa = mls_core::field::kernel_isa(),
+        isa = mls_core::kernels::kernel_isa(),
     );
 
     // Targets.
@@ -1316,12 +1316,12 @@ fn render(
          accumulators) compiled for the instruction set the field's per-sample loops run with \
          here, **{isa}** ({lanes}, no FMA), run at **{:.1} GFLOP/s per core** (per CPU-second \
          of the thread, so other processes do not lower it). The field's loops are chosen at \
-         run time (`mls_core::field::kernel_isa`): AVX2 where the CPU has it, else the x86-64 \
+         run time (`mls_core::kernels::kernel_isa`): AVX2 where the CPU has it, else the x86-64 \
          baseline (SSE2, 2 lanes); both give the same bits. Multiply and add stay separate \
          roundings, so FMA is not used; AVX-512 (8 lanes) is not used either.\n",
         env.peak / 1e9,
-        isa = mls_core::field::kernel_isa(),
-        lanes = if mls_core::field::kernel_isa() == "avx2" {
+        isa = mls_core::kernels::kernel_isa(),
+        lanes = if mls_core::kernels::kernel_isa() == "avx2" {
             "4 lanes"
         } else {
             "2 lanes"

@@ -49,7 +49,7 @@ const FAULTS: &[Fault] = &[
     Fault {
         name: "F5 coefficient 12 → 6",
         description: "−12/h² B D Dᵀ (Appendix) written −6/h² B D Dᵀ",
-        file: "crates/mls-core/src/field.rs",
+        file: "crates/mls-core/src/kernels/field.rs",
         original: "let c_bb = -6.0 * a * b;",
         replacement: "let c_bb = -3.0 * a * b;",
     },
@@ -63,7 +63,7 @@ const FAULTS: &[Fault] = &[
     Fault {
         name: "F7 β's 3aB² by (1 + 1e-9)",
         description: "near threshold: β = 1 − 3aB² with 3(1 + 1e-9) (∇g and H move by about 1e-9 relative)",
-        file: "crates/mls-core/src/field.rs",
+        file: "crates/mls-core/src/kernels/field.rs",
         original: "let beta = 1.0 - 3.0 * a * b2;",
         replacement: "let beta = 1.0 - 3.0 * (1.0 + 1e-9) * a * b2;",
     },
@@ -77,14 +77,14 @@ const FAULTS: &[Fault] = &[
     Fault {
         name: "X1 exp's P1 by (1 + 1e-9)",
         description: "near threshold: the first coefficient of the kernels' exp polynomial off by 1e-9 relative",
-        file: "crates/mls-core/src/field.rs",
+        file: "crates/mls-core/src/kernels/exp.rs",
         original: "const P1: f64 = 1.666_666_666_666_660_2e-1;",
         replacement: "const P1: f64 = 1.666_666_666_666_660_2e-1 * (1.0 + 1e-9);",
     },
     Fault {
         name: "X2 exp's ln 2 split without its low part",
         description: "r = x − k ln2_hi, dropping the k ln2_lo correction (weights off by up to 1e-7 relative)",
-        file: "crates/mls-core/src/field.rs",
+        file: "crates/mls-core/src/kernels/exp.rs",
         original: "let lo = kf * LN2_LO;",
         replacement: "let lo = kf * 0.0 * LN2_LO;",
     },
@@ -92,15 +92,15 @@ const FAULTS: &[Fault] = &[
         name: "S1 search radius × 0.64",
         description: "the k-d tree query radius 0.64 × cutoff·h (issue 12's audit)",
         file: "crates/mls-core/src/surface.rs",
-        original: ".within::<SquaredEuclidean<f64>>(radius * radius)",
-        replacement: ".within::<SquaredEuclidean<f64>>((0.64 * radius) * (0.64 * radius))",
+        original: "hits.clear();\n        self.tree\n            .query(&x.coords.into())\n            .within::<SquaredEuclidean<f64>>(radius * radius)",
+        replacement: "hits.clear();\n        self.tree\n            .query(&x.coords.into())\n            .within::<SquaredEuclidean<f64>>((0.64 * radius) * (0.64 * radius))",
     },
     Fault {
         name: "S2 cluster reach = radius",
         description: "a cluster's shared search reaches the support radius from its centre, not radius + spread (issue 12's audit)",
         file: "crates/mls-core/src/surface.rs",
-        original: "let reach = radius + spread;",
-        replacement: "let reach = radius;",
+        original: "let reach = (radius + spread) * (1.0 + 1e-9);",
+        replacement: "let reach = radius * (1.0 + 1e-9);",
     },
     Fault {
         name: "C1 mean of the shape operator by (1 + 1e-9)",
@@ -119,7 +119,7 @@ const FAULTS: &[Fault] = &[
     Fault {
         name: "P1 e″'s 10aB² by (1 + 1e-9)",
         description: "near threshold: e″ = Σθ(2 − 10aB² + 4a²B⁴) with 10(1 + 1e-9)",
-        file: "crates/mls-core/src/projection.rs",
+        file: "crates/mls-core/src/kernels/line.rs",
         original: "theta[l] * (2.0 - 10.0 * ab2[l]",
         replacement: "theta[l] * (2.0 - 10.0 * (1.0 + 1e-9) * ab2[l]",
     },
@@ -133,7 +133,7 @@ const FAULTS: &[Fault] = &[
     Fault {
         name: "P3 e′ cubic term 3aB³",
         description: "e′ = Σ 2θ(B − aB³) misread as Σ 2θ(B − 3aB³) (d/dB of B³ taken twice)",
-        file: "crates/mls-core/src/projection.rs",
+        file: "crates/mls-core/src/kernels/line.rs",
         original: "2.0 * theta[l] * bb[l] * (1.0 - ab2[l])",
         replacement: "2.0 * theta[l] * bb[l] * (1.0 - 3.0 * ab2[l])",
     },

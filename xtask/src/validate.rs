@@ -168,8 +168,12 @@ const ROWS: [Row; 30] = [
         0.0,
         "`estimate_normals` / `mls_ad::normal_witness`",
     ),
-    row("exp_weight (ulps)", 1.0, "`field::exp_weight` / `f64::exp`"),
-    row("exp_any (ulps)", 1.0, "`field::exp_any` / `f64::exp`"),
+    row(
+        "exp_weight (ulps)",
+        1.0,
+        "`kernels::exp_weight` / `f64::exp`",
+    ),
+    row("exp_any (ulps)", 1.0, "`kernels::exp_any` / `f64::exp`"),
     row(
         "adaptive scale and extrapolation choice",
         0.0,
@@ -299,7 +303,7 @@ pub(crate) fn run(o: &Options) -> Result<()> {
         tally.evals,
         rayon::current_num_threads(),
         tally.skipped,
-        mls_core::field::kernel_isa(),
+        mls_core::kernels::kernel_isa(),
     )?;
     report.push_str(
         "| quantity | worst relative difference | threshold | seed of worst case | comparisons | production / witness |\n\

@@ -2,7 +2,7 @@
 //! branch-free exp of the kernels against the standard library's, and the shrinkage
 //! correction on curvatures and scales where the correction is large.
 
-use mls_core::field::{exp_any, exp_weight};
+use mls_core::kernels::{exp_any, exp_weight};
 use mls_core::{Curvature, Vector};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;

@@ -38,7 +38,7 @@ impl Variant {
         let isa = if self.portable {
             "portable"
         } else {
-            mls_core::field::kernel_isa()
+            mls_core::kernels::kernel_isa()
         };
         match self.threads {
             0 => format!("`{entry}`, sequential, {isa} kernels"),
@@ -49,9 +49,9 @@ impl Variant {
     /// Runs `f` with the parallelism and kernels of this variant.
     fn run<T: Send>(&self, f: impl FnOnce(Parallelism) -> T + Send) -> T {
         if self.threads == 0 {
-            mls_core::field::set_portable_kernels(self.portable);
+            mls_core::kernels::set_portable_kernels(self.portable);
             let out = f(Parallelism::Sequential);
-            mls_core::field::set_portable_kernels(false);
+            mls_core::kernels::set_portable_kernels(false);
             return out;
         }
         pool(self.threads, self.portable).install(|| f(Parallelism::Rayon))
@@ -68,7 +68,7 @@ fn pool(threads: usize, portable: bool) -> &'static ThreadPool {
                 let portable = i % 2 == 1;
                 ThreadPoolBuilder::new()
                     .num_threads(i / 2 + 1)
-                    .start_handler(move |_| mls_core::field::set_portable_kernels(portable))
+                    .start_handler(move |_| mls_core::kernels::set_portable_kernels(portable))
                     .build()
                     .expect("a rayon pool of at most 3 threads")
             })

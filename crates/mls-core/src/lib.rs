@@ -21,6 +21,7 @@ pub mod error;
 pub mod field;
 pub mod jet;
 pub mod kernel;
+pub mod kernels;
 pub mod math;
 pub mod normals;
 pub mod projection;

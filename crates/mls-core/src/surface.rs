@@ -9,8 +9,9 @@ use crate::error::ConfigError;
 use crate::field::{FieldScratch, Implicit, Sample, evaluate, evaluate_loaded};
 use crate::jet::{self, JetConfig, JetPoint};
 use crate::kernel::{Cutoff, Kernel};
+use crate::kernels::LineBlock;
 use crate::math::{Point, UnitNormal, Vector, bounding_box_centre};
-use crate::projection::{LineBlock, ProjectionConfig, line_minimum};
+use crate::projection::{ProjectionConfig, line_minimum};
 use crate::status::PointStatus;
 
 /// Who runs the per-point loop. The caller decides (for example a `--threads` option sets up
