@@ -30,8 +30,6 @@
 //! whose shrinkage bias is large, the smallest scales are kept and extrapolation removes the
 //! bias. `docs/paper.md` measures both.
 
-use rayon::prelude::*;
-
 use crate::curvature::Curvature;
 use crate::error::ConfigError;
 use crate::math::{Point, Vector};
@@ -245,17 +243,12 @@ impl AdaptiveSurface {
                 )))
             };
             type Step = Result<Option<(Estimate, Option<f64>)>, PointStatus>;
-            let steps: Vec<Step> = match par {
-                Parallelism::Sequential => {
-                    let mut ev = surface.evaluator();
-                    (0..active.len()).map(|k| step(&mut ev, k)).collect()
-                }
-                Parallelism::Rayon => (0..active.len())
-                    .into_par_iter()
-                    .with_min_len(64)
-                    .map_init(|| surface.evaluator(), |ev, k| step(ev, k))
-                    .collect(),
-            };
+            let steps: Vec<Step> = par.map_init(
+                active.len(),
+                64,
+                || surface.evaluator(),
+                |ev, k| step(ev, k),
+            );
             for (&i, step) in active.iter().zip(steps) {
                 advance(&mut states[i], step, config.confidence, last);
             }

@@ -24,6 +24,7 @@ pub mod kernel;
 pub mod kernels;
 pub mod math;
 pub mod normals;
+pub mod par;
 pub mod projection;
 pub mod status;
 pub mod stream;

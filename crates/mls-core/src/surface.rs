@@ -11,19 +11,9 @@ use crate::jet::{self, JetConfig, JetPoint};
 use crate::kernel::{Cutoff, Kernel};
 use crate::kernels::LineBlock;
 use crate::math::{Point, UnitNormal, Vector, bounding_box_centre};
+pub use crate::par::Parallelism;
 use crate::projection::{ProjectionConfig, line_minimum};
 use crate::status::PointStatus;
-
-/// Who runs the per-point loop. The caller decides (for example a `--threads` option sets up
-/// a rayon pool and installs it around the call).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum Parallelism {
-    /// One thread, in order.
-    Sequential,
-    /// rayon's current thread pool.
-    #[default]
-    Rayon,
-}
 
 /// Parameters of the MLS surface.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -242,17 +232,12 @@ impl MlsSurface {
         config: &JetConfig,
         par: Parallelism,
     ) -> Vec<Result<JetPoint, PointStatus>> {
-        match par {
-            Parallelism::Sequential => {
-                let mut ev = self.evaluator();
-                queries.iter().map(|q| ev.jet_at(q, config)).collect()
-            }
-            Parallelism::Rayon => queries
-                .par_iter()
-                .with_min_len(256)
-                .map_init(|| self.evaluator(), |ev, q| ev.jet_at(q, config))
-                .collect(),
-        }
+        par.map_init(
+            queries.len(),
+            256,
+            || self.evaluator(),
+            |ev, i| ev.jet_at(&queries[i], config),
+        )
     }
 
     /// Projects each query point onto the MLS surface and evaluates curvature there.
@@ -311,10 +296,7 @@ impl MlsSurface {
             rank[i] = k;
         }
         let gather = |i: usize| pairs[rank[i]].1;
-        match par {
-            Parallelism::Sequential => (0..queries.len()).map(gather).collect(),
-            Parallelism::Rayon => (0..queries.len()).into_par_iter().map(gather).collect(),
-        }
+        par.map(queries.len(), 1, gather)
     }
 
     /// Appends to `out` the samples within `radius` of `x` (internal frame), in tree order.
@@ -350,19 +332,14 @@ impl MlsSurface {
     where
         F: Fn(&mut Evaluator<'_>, &Point) -> PointResult + Sync,
     {
-        match par {
-            Parallelism::Sequential => {
-                let mut ev = self.evaluator();
-                queries.iter().map(|q| f(&mut ev, q)).collect()
-            }
-            // Chunks of a few hundred points amortise the evaluator set-up and keep each
-            // thread's buffers warm.
-            Parallelism::Rayon => queries
-                .par_iter()
-                .with_min_len(256)
-                .map_init(|| self.evaluator(), |ev, q| f(ev, q))
-                .collect(),
-        }
+        // Pieces of a few hundred points amortise the evaluator set-up and keep each
+        // thread's buffers warm.
+        par.map_init(
+            queries.len(),
+            256,
+            || self.evaluator(),
+            |ev, i| f(ev, &queries[i]),
+        )
     }
 }
 

@@ -3,7 +3,6 @@
 use std::iter;
 
 use nalgebra::SymmetricEigen;
-use rayon::prelude::*;
 
 use super::{NeighbourGraph, NormalsError, check_points, check_scale, check_tolerance};
 use crate::math::{Matrix, Point, UnitNormal, Vector};
@@ -145,13 +144,5 @@ pub fn estimate_unoriented(
             .filter_map(|&j| points.get(j as usize));
         normal_from_neighbourhood(p, iter::once(p).chain(others), h, tolerance)
     };
-    Ok(match par {
-        Parallelism::Sequential => points.iter().enumerate().map(at).collect(),
-        Parallelism::Rayon => points
-            .par_iter()
-            .with_min_len(256)
-            .enumerate()
-            .map(at)
-            .collect(),
-    })
+    Ok(par.map(points.len(), 256, |i| at((i, &points[i]))))
 }

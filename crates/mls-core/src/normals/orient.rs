@@ -320,14 +320,7 @@ where
             })
     };
     let add = |a: (usize, usize), b: (usize, usize)| (a.0 + b.0, a.1 + b.1);
-    let (all, agree) = match par {
-        Parallelism::Sequential => (0..graph.len()).map(count).fold((0, 0), add),
-        Parallelism::Rayon => (0..graph.len())
-            .into_par_iter()
-            .with_min_len(1024)
-            .map(count)
-            .reduce(|| (0, 0), add),
-    };
+    let (all, agree) = par.sum(graph.len(), 1024, (0, 0), count, add);
     (all > 0).then(|| agree as f64 / all as f64)
 }
 
@@ -353,14 +346,8 @@ where
         ]
     };
     let add = |a: [usize; 4], b: [usize; 4]| [a[0] + b[0], a[1] + b[1], a[2] + b[2], a[3] + b[3]];
-    let [normals, facing, decisive, decisive_facing] = match par {
-        Parallelism::Sequential => (0..points.len()).map(count).fold([0; 4], add),
-        Parallelism::Rayon => (0..points.len())
-            .into_par_iter()
-            .with_min_len(1024)
-            .map(count)
-            .reduce(|| [0; 4], add),
-    };
+    let [normals, facing, decisive, decisive_facing] =
+        par.sum(points.len(), 1024, [0; 4], count, add);
     Facing {
         normals,
         facing,
@@ -407,10 +394,7 @@ fn orient_along_tree(
             })
     };
     let mut keys = edge_keys(n, par, keys_of);
-    match par {
-        Parallelism::Sequential => keys.sort_unstable(),
-        Parallelism::Rayon => keys.par_sort_unstable(),
-    }
+    par.sort_unstable(&mut keys);
 
     let oriented = est.iter().filter(|e| e.is_ok()).count();
     let mut sets = DisjointSets::new(n);
@@ -576,10 +560,7 @@ where
     let block = |b: usize| b * KEY_BLOCK..((b + 1) * KEY_BLOCK).min(n);
     let blocks = n.div_ceil(KEY_BLOCK);
     let count = |b: usize| block(b).map(|i| keys_of(i).count()).sum::<usize>();
-    let counts: Vec<usize> = match par {
-        Parallelism::Sequential => (0..blocks).map(count).collect(),
-        Parallelism::Rayon => (0..blocks).into_par_iter().map(count).collect(),
-    };
+    let counts: Vec<usize> = par.map(blocks, 1, count);
     let mut keys = vec![0_u64; counts.iter().sum()];
     let mut slices: Vec<(usize, &mut [u64])> = Vec::with_capacity(blocks);
     let mut rest = keys.as_mut_slice();

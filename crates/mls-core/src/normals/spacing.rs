@@ -3,7 +3,6 @@
 use std::num::NonZeroUsize;
 
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
-use rayon::prelude::*;
 
 use super::{NormalsError, bounding_box_centre, check_points, check_scale};
 use crate::math::Point;
@@ -43,10 +42,7 @@ impl DistanceStats {
     /// Statistics of `values` (sorted here); percentiles interpolate linearly between order
     /// statistics. All NaN for an empty slice.
     fn of(values: &mut [f64], par: Parallelism) -> Self {
-        match par {
-            Parallelism::Sequential => values.sort_unstable_by(f64::total_cmp),
-            Parallelism::Rayon => values.par_sort_unstable_by(f64::total_cmp),
-        }
+        par.sort_unstable_by(values, f64::total_cmp);
         let q = |p: f64| quantile(values, p);
         Self {
             min: q(0.0),
@@ -134,10 +130,7 @@ pub fn spacing_statistics(
             .then(a[1].total_cmp(&b[1]))
             .then(a[2].total_cmp(&b[2]))
     };
-    match par {
-        Parallelism::Sequential => coords.sort_unstable_by(lexicographic),
-        Parallelism::Rayon => coords.par_sort_unstable_by(lexicographic),
-    }
+    par.sort_unstable_by(&mut coords, lexicographic);
     coords.dedup();
     let distinct = coords.len();
     if distinct < 2 {
@@ -148,14 +141,7 @@ pub fn spacing_statistics(
         .map_err(|_| NormalsError::TooManyPoints(points.len()))?;
     let rho = square_grid_rms_distance(k_eff);
     let per_point = |i: usize| local_distances(&tree, &coords, i, k_eff, rho);
-    let rows: Vec<[f64; 3]> = match par {
-        Parallelism::Sequential => (0..distinct).map(per_point).collect(),
-        Parallelism::Rayon => (0..distinct)
-            .into_par_iter()
-            .with_min_len(256)
-            .map(per_point)
-            .collect(),
-    };
+    let rows: Vec<[f64; 3]> = par.map(distinct, 256, per_point);
     let column = |c: usize| {
         let mut v: Vec<f64> = rows.iter().map(|r| r[c]).collect();
         DistanceStats::of(&mut v, par)
