@@ -34,8 +34,8 @@ use mls_io::FileFormat;
 
 use files::{Workspace, for_each_chunk, open_reader};
 pub use files::{available_memory, parse_size};
-pub use tile::{TileResult, tile_curvature};
 use tile::{RESULT_BYTES, evaluate_tile, write_output};
+pub use tile::{TileResult, tile_curvature};
 
 use crate::evaluate;
 use crate::pipeline::{self, Scale, Timings};
