@@ -269,6 +269,63 @@ impl PyPlan {
             .unzip()
     }
 
+    /// For occupied cells (linear indices, as `_Grid.counts` numbers them): the tiles whose
+    /// cores hold them, and the tiles that may load a point of them (every tile whose box of
+    /// cells lies within the reach of the cell's box: a superset of [`TilePlan::tiles_near`]
+    /// of its points). Each a sorted int64 array without repeats; the graph's edges from a
+    /// chunk to the tiles, known before any point is split.
+    fn tiles_of_cells<'py>(
+        &self,
+        py: Python<'py>,
+        cells: &Bound<'py, PyAny>,
+    ) -> PyResult<Pairs<'py>> {
+        let cells: Vec<i64> = crate::files::values(cells, "int64")?;
+        let grid = self.plan.grid();
+        let [nx, ny, nz] = grid.dims();
+        if let Some(c) = cells.iter().find(|&&c| c < 0 || c as usize >= grid.len()) {
+            return Err(PyValueError::new_err(format!(
+                "cells: {c} is not a cell of a grid of {} cells",
+                grid.len()
+            )));
+        }
+        let (own, near) = py.detach(|| {
+            let (mut own, mut near) = (vec![false; self.plan.tiles().len()], Vec::new());
+            near.resize(own.len(), false);
+            let cell = grid.cell();
+            let lo = vector(self.lo);
+            for &c in &cells {
+                let c = c as usize;
+                let at = [c % nx, (c / nx) % ny, c / (nx * ny)];
+                debug_assert!(at[2] < nz);
+                // The cell's centre lies in the cell, whatever the rounding at its faces.
+                let centre = Point::from(lo + Vector::from(at.map(|a| (a as f64 + 0.5) * cell)));
+                own[self.plan.tile_of(&centre)] = true;
+                for (t, tile) in self.plan.tiles().iter().enumerate() {
+                    // Whole cells between the cell and the tile's box, per axis: the boxes are
+                    // at least that far apart.
+                    let gap: f64 = (0..3)
+                        .map(|i| {
+                            let cells = tile.start[i]
+                                .saturating_sub(at[i] + 1)
+                                .max(at[i].saturating_sub(tile.end[i]));
+                            (cells as f64 * cell).powi(2)
+                        })
+                        .sum();
+                    if gap <= self.plan.reach() * self.plan.reach() {
+                        near[t] = true;
+                    }
+                }
+            }
+            let list = |flags: Vec<bool>| -> Vec<i64> {
+                (0..flags.len() as i64)
+                    .filter(|&t| flags[t as usize])
+                    .collect()
+            };
+            (list(own), list(near))
+        });
+        Ok((own.into_pyarray(py), near.into_pyarray(py)))
+    }
+
     /// The tile whose core holds each point (int64, one per row of `points`).
     fn tile_of<'py>(
         &self,

@@ -79,6 +79,13 @@ def test_plan_has_many_tiles_and_complete_halos(cloud):
     own = plan.tile_of(sample)
     rows, tiles = plan.loads(sample)
     assert np.all(np.isin(own, np.arange(len(plan))))
+    # The graph's edges from the grid's cells: a superset of the tiles the points need.
+    cells = np.flatnonzero(mlscurv._mlscurv._Grid(
+        points.min(0).tolist(), points.max(0).tolist(), mlscurv.dask.MAX_CELLS
+    ).counts(sample))
+    own_tiles, near_tiles = plan.tiles_of_cells(cells)
+    assert set(own.tolist()) == set(own_tiles.tolist())
+    assert set(tiles.tolist()) <= set(near_tiles.tolist())
     # Its own tile loads each point.
     assert {(r, own[r]) for r in range(len(sample))} <= set(zip(rows.tolist(), tiles.tolist()))
     for t in range(len(plan)):

@@ -168,10 +168,15 @@ def _plan(points, normals, *, h, cutoff, method, capacity, max_cells):
     lo = np.min([b[0] for b in boxes], axis=0).tolist()
     hi = np.max([b[1] for b in boxes], axis=0).tolist()
     grid = _mlscurv._Grid(lo, hi, max_cells)
-    (counts,) = dask.compute(_tree_sum(delayed(_counts)(grid, p) for p in p_blocks))
+    counts = [delayed(_counts)(grid, p) for p in p_blocks]
+    total, occupied = dask.compute(_tree_sum(counts), [delayed(_occupied)(c) for c in counts])
     reach = _mlscurv._reach(h, cutoff, method, normals is None)
-    plan = _mlscurv._Plan(lo, hi, counts, reach, capacity, max_cells)
-    return plan, lo, hi, offsets, p_blocks, n_blocks
+    plan = _mlscurv._Plan(lo, hi, total, reach, capacity, max_cells)
+    # Which tiles each chunk feeds and takes results from: the graph's only edges, so that it
+    # grows with the halos' overlaps, not with chunks × tiles.
+    cells = [np.flatnonzero(np.unpackbits(o, count=len(grid))) for o in occupied]
+    incidence = [plan.tiles_of_cells(c) for c in cells]
+    return plan, lo, hi, offsets, p_blocks, n_blocks, incidence
 
 
 def _graph(points, normals, *, h, cutoff, method, orient, memory, max_cells, threads):
@@ -181,7 +186,7 @@ def _graph(points, normals, *, h, cutoff, method, orient, memory, max_cells, thr
     capacity = _mlscurv._capacity(_budget(memory))
     _mlscurv._reach(h, cutoff, method, normals is None)  # the options' errors before any work
     _mlscurv._check_orient(orient)
-    plan, lo, hi, offsets, p_blocks, n_blocks = _plan(
+    plan, lo, hi, offsets, p_blocks, n_blocks, incidence = _plan(
         points, normals, h=h, cutoff=cutoff, method=method, capacity=capacity,
         max_cells=max_cells,
     )
@@ -190,18 +195,24 @@ def _graph(points, normals, *, h, cutoff, method, orient, memory, max_cells, thr
     splits = [
         delayed(_split)(plan_d, p, q, int(o)) for p, q, o in zip(p_blocks, n_blocks, offsets)
     ]
-    tiles = [
-        delayed(_tile)(plan_d, t, options, *[delayed(_part)(s, t) for s in splits])
-        for t in range(len(plan))
-    ]
+    feeds = [set(near.tolist()) for _, near in incidence]
+    tiles = {
+        t: delayed(_tile)(
+            plan_d, t, options, *[delayed(_part)(s, t) for s, f in zip(splits, feeds) if t in f]
+        )
+        for t in sorted(set().union(*(own.tolist() for own, _ in incidence)))
+    }
     names = _columns(method)
     chunks = [
         delayed(_assemble)(
             int(offsets[c + 1] - offsets[c]),
             names,
-            *[delayed(_rows_in)(r, int(offsets[c]), int(offsets[c + 1])) for r in tiles],
+            *[
+                delayed(_rows_in)(tiles[t], int(offsets[c]), int(offsets[c + 1]))
+                for t in own.tolist()
+            ],
         )
-        for c in range(len(p_blocks))
+        for c, (own, _) in enumerate(incidence)
     ]
     return plan, chunks, offsets, names
 
@@ -320,6 +331,11 @@ def _read(path):
 
 def _counts(grid, points):
     return grid.counts(points)
+
+
+def _occupied(counts):
+    """The cells a chunk has points in, a bit each."""
+    return np.packbits(counts > 0)
 
 
 def _write(path, out, chunk):
