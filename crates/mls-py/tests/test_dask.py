@@ -183,6 +183,13 @@ def test_bad_input_raises_the_single_calls_errors(client, cloud):
     got = message(lambda: mlscurv.dask.curvature(da.from_array(flat, chunks=CHUNK), h=H))
     assert got == expected
 
+    short = normals[:100]
+    expected = message(lambda: mlscurv.curvature(points, short, h=H))
+    got = message(
+        lambda: mlscurv.dask.curvature(da.from_array(points, chunks=CHUNK), short, h=H)
+    )
+    assert got == expected
+
     few = points[:3]
     assert message(lambda: mlscurv.dask.curvature(da.from_array(few), h=H)) == message(
         lambda: mlscurv.curvature(few, h=H)

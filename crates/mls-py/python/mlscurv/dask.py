@@ -37,7 +37,7 @@ from . import _mlscurv
 # when pickled to the workers.
 MAX_CELLS = 1 << 16
 
-#: The arrays of a result, in the order of the command's columns.
+# The arrays of a result of shape (N, 3); the others are of shape (N,).
 _VECTORS = ("normals", "d1", "d2")
 
 
@@ -293,13 +293,13 @@ def curvature(
     """
     points = _as_cloud(points, "points")
     if normals is not None:
-        normals = _as_cloud(normals, "normals", chunks=points.chunks)
-        if normals.shape[0] != points.shape[0]:
+        rows = np.shape(normals)[0] if np.ndim(normals) else 0
+        if rows != points.shape[0]:
             raise ValueError(
-                f"normals: {normals.shape[0]} rows for {points.shape[0]} points; expected one "
-                "normal per point"
+                f"normals: {rows} rows for {points.shape[0]} points; expected one normal per "
+                "point"
             )
-        normals = normals.rechunk(points.chunks)
+        normals = _as_cloud(normals, "normals", chunks=points.chunks).rechunk(points.chunks)
     _, chunks, offsets, names = _graph(
         points, normals, h=h, cutoff=cutoff, method=method, orient=orient, memory=memory,
         max_cells=max_cells, threads=threads,
