@@ -97,17 +97,21 @@ def test_plan_has_many_tiles_and_complete_halos(cloud):
         assert np.sqrt(d2.min()) > plan.reach, t
 
 
-@pytest.mark.parametrize("method", ["jet", "paper"])
-def test_equals_the_single_call_bitwise(client, cloud, method):
+@pytest.mark.parametrize(
+    "method, rows",
+    [("jet", (CHUNK,) * 8), ("paper", (20_000, 1, 14_999, 25_000))],
+)
+def test_equals_the_single_call_bitwise(client, cloud, method, rows):
+    """Eight equal chunks, or uneven ones with a chunk of one point: the single call's bits."""
     points, normals = cloud
     lazy = mlscurv.dask.curvature(
-        da.from_array(points, chunks=CHUNK),
-        da.from_array(normals, chunks=CHUNK),
+        da.from_array(points, chunks=(rows, 3)),
+        da.from_array(normals, chunks=(rows, 3)),
         h=H,
         method=method,
         memory=SMALL,
     )
-    assert lazy["k1"].chunks == ((CHUNK,) * 8,)
+    assert lazy["k1"].chunks == (rows,)
     assert_same(lazy, mlscurv.curvature(points, normals, h=H, method=method))
 
 

@@ -137,18 +137,16 @@ def _rows_in(result, first, end):
 
 def _assemble(n, names, *pieces):
     """One chunk of the result from its rows' pieces, every row given by exactly one tile."""
-    out = None
+    out = {
+        k: np.empty((n, 3) if k in _VECTORS else (n,), np.int32 if k == "status" else np.float64)
+        for k in names
+    }
     for piece in pieces:
-        if piece is None:
-            continue
-        rows, arrays = piece
-        if out is None:
-            out = {
-                k: np.empty((n,) + a.shape[1:], dtype=a.dtype) for k, a in arrays.items()
-            }
-        for k, a in arrays.items():
-            out[k][rows] = a
-    return {k: out[k] for k in names}
+        if piece is not None:
+            rows, arrays = piece
+            for k, a in arrays.items():
+                out[k][rows] = a
+    return out
 
 
 def _check(points, normals, first):
@@ -310,13 +308,11 @@ def curvature(
 def _result(points, chunks, offsets, names):
     out = {"points": points}
     for name in names:
-        vector = name in _VECTORS
-        dtype = np.int32 if name == "status" else np.float64
         blocks = [
             da.from_delayed(
                 delayed(lambda d, k=name: d[k])(c),
-                shape=(int(offsets[i + 1] - offsets[i]),) + ((3,) if vector else ()),
-                dtype=dtype,
+                shape=(int(offsets[i + 1] - offsets[i]),) + ((3,) if name in _VECTORS else ()),
+                dtype=np.int32 if name == "status" else np.float64,
             )
             for i, c in enumerate(chunks)
         ]
