@@ -4,7 +4,7 @@
 use std::path::PathBuf;
 
 use mls_cli::pipeline;
-use mls_io::{AttributeData, Column, ColumnNames, ReadError, ReadOptions, WriteError};
+use mls_io::{AttributeData, Axis, Column, ColumnNames, ReadError, ReadOptions, WriteError};
 use numpy::{PyArray1, PyArrayMethods};
 use pyo3::exceptions::{
     PyFileNotFoundError, PyIsADirectoryError, PyOSError, PyPermissionError, PyTypeError,
@@ -214,9 +214,10 @@ pub(crate) fn values<T: numpy::Element>(array: &Bound<'_, PyAny>, dtype: &str) -
     let py = array.py();
     let kwargs = PyDict::new(py);
     kwargs.set_item("dtype", dtype)?;
-    let contiguous =
-        py.import("numpy")?
-            .call_method("ascontiguousarray", (array,), Some(&kwargs))?;
+    kwargs.set_item("requirements", "CA")?;
+    let contiguous = py
+        .import("numpy")?
+        .call_method("require", (array,), Some(&kwargs))?;
     contiguous
         .cast_into::<PyArray1<T>>()?
         .to_vec()
@@ -359,6 +360,52 @@ pub(crate) fn write(
         let output = pipeline::check_output(&[], &path, format, force, ascii, None)?;
         let columns: Vec<Column<'_>> = owned.iter().map(Owned::column).collect();
         output.write(&columns, ascii, None)
+    })
+    .map_err(file_error)
+}
+
+/// Writes the points of `input` with `data` (a mapping of a result's columns but the
+/// coordinates, one row per point of `input`) to `output` as `mlscurv curvature input -o
+/// output` writes its result: with the input's attributes
+/// after the coordinates and normals (renamed where a result column has the name) and, for a
+/// LAS input, its layout. The writer of `mlscurv.dask.curvature_files`.
+#[pyfunction]
+#[pyo3(signature = (input, output, data, *, force=false))]
+pub(crate) fn _write_like(
+    py: Python<'_>,
+    input: PathBuf,
+    output: PathBuf,
+    data: &Bound<'_, pyo3::types::PyMapping>,
+    force: bool,
+) -> PyResult<()> {
+    let mut owned = Vec::new();
+    for item in data.items()?.iter() {
+        let (key, value): (String, Bound<'_, PyAny>) = item.extract()?;
+        owned_columns(&key, &value, &mut owned)?;
+    }
+    py.detach(|| -> anyhow::Result<()> {
+        let cloud = pipeline::read(&input, None, None)?;
+        let n = cloud.points.len();
+        if let Some(c) = owned.iter().find(|c| c.len() != n) {
+            anyhow::bail!(
+                "column {:?}: {} rows for the {n} points of {}",
+                c.name(),
+                c.len(),
+                input.display()
+            );
+        }
+        let mut carried = pipeline::Carried::new(cloud.attributes, cloud.las, true);
+        let out = pipeline::check_output(&[input.as_path()], &output, None, force, false, None)?;
+        carried.check(out.format(), &input)?;
+        let mut columns: Vec<Column<'_>> = [Axis::X, Axis::Y, Axis::Z]
+            .into_iter()
+            .zip(["x", "y", "z"])
+            .map(|(axis, name)| Column::component(name, &cloud.points, axis))
+            .collect();
+        columns.extend(owned.iter().map(Owned::column));
+        carried.rename_clashes(&columns, &input);
+        let columns = carried.insert(columns, 6);
+        out.write(&columns, false, carried.las.as_ref())
     })
     .map_err(file_error)
 }

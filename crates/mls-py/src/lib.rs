@@ -19,6 +19,7 @@
 mod files;
 mod functions;
 mod result;
+mod tiles;
 
 use std::borrow::Cow;
 use std::ffi::CString;
@@ -47,6 +48,7 @@ fn coordinates<'py>(obj: &Bound<'py, PyAny>, what: &str) -> PyResult<Bound<'py, 
     if let Ok(array) = obj.cast::<PyArray2<f64>>()
         && array.shape()[1] == 3
         && array.is_c_contiguous()
+        && array.getattr("flags")?.getattr("aligned")?.is_truthy()?
     {
         return Ok(array.clone());
     }
@@ -74,9 +76,12 @@ fn coordinates<'py>(obj: &Bound<'py, PyAny>, what: &str) -> PyResult<Bound<'py, 
             shape_text(&shape)
         )));
     }
+    // Aligned as well as contiguous: an array that Dask's workers unpickled can start at any
+    // byte, and numpy's `ascontiguousarray` would leave it so.
     let kwargs = PyDict::new(py);
     kwargs.set_item("dtype", np.getattr("float64")?)?;
-    let converted = np.call_method("ascontiguousarray", (array,), Some(&kwargs))?;
+    kwargs.set_item("requirements", "CA")?;
+    let converted = np.call_method("require", (array,), Some(&kwargs))?;
     Ok(converted.cast_into::<PyArray2<f64>>()?)
 }
 
@@ -117,6 +122,12 @@ fn as_points(flat: &[f64]) -> Cow<'_, [Point]> {
 /// Refuses a non-finite value, as the file readers do; `row` names a row in the message
 /// (`point`, `normal`).
 fn check_finite(flat: &[f64], what: &str, row: &str) -> PyResult<()> {
+    check_finite_from(flat, what, row, 0)
+}
+
+/// [`check_finite`] of rows numbered from `first`: a chunk of a larger array, named in the
+/// message by its row in the whole.
+fn check_finite_from(flat: &[f64], what: &str, row: &str, first: usize) -> PyResult<()> {
     match flat
         .chunks_exact(3)
         .position(|c| !c.iter().all(|v| v.is_finite()))
@@ -125,8 +136,11 @@ fn check_finite(flat: &[f64], what: &str, row: &str) -> PyResult<()> {
         Some(i) => {
             let c = &flat[3 * i..3 * i + 3];
             Err(PyValueError::new_err(format!(
-                "{what}: {row} {i} is not finite: ({}, {}, {})",
-                c[0], c[1], c[2]
+                "{what}: {row} {} is not finite: ({}, {}, {})",
+                first + i,
+                c[0],
+                c[1],
+                c[2]
             )))
         }
     }
@@ -312,13 +326,24 @@ fn status_names(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
 /// Sign convention: curvature is positive where the surface bends away from the oriented
 /// normal (a sphere with outward normals has k1 = k2 = mean = 1/R); mean = (k1 + k2)/2.
 #[pymodule]
-fn mlscurv(m: &Bound<'_, PyModule>) -> PyResult<()> {
+fn _mlscurv(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(functions::curvature, m)?)?;
     m.add_function(wrap_pyfunction!(functions::normals, m)?)?;
     m.add_function(wrap_pyfunction!(functions::project, m)?)?;
     m.add_function(wrap_pyfunction!(files::read, m)?)?;
     m.add_function(wrap_pyfunction!(files::write, m)?)?;
     m.add_class::<result::Table>()?;
+    // The private pieces of `mlscurv.dask`.
+    m.add_function(wrap_pyfunction!(tiles::_check_chunk, m)?)?;
+    m.add_function(wrap_pyfunction!(tiles::_check_count, m)?)?;
+    m.add_function(wrap_pyfunction!(tiles::_reach, m)?)?;
+    m.add_function(wrap_pyfunction!(tiles::_capacity, m)?)?;
+    m.add_function(wrap_pyfunction!(tiles::_check_orient, m)?)?;
+    m.add_function(wrap_pyfunction!(tiles::_parse_size, m)?)?;
+    m.add_function(wrap_pyfunction!(tiles::_tile_curvature, m)?)?;
+    m.add_function(wrap_pyfunction!(files::_write_like, m)?)?;
+    m.add_class::<tiles::PyGrid>()?;
+    m.add_class::<tiles::PyPlan>()?;
     m.add("STATUS", status_names(m.py())?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())

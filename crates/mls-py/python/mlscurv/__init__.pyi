@@ -1,4 +1,5 @@
-"""Type stub of the ``mlscurv`` extension module (crates/mls-py/src/lib.rs)."""
+"""Type stub of the ``mlscurv`` package: the native module ``mlscurv._mlscurv``
+(crates/mls-py/src/lib.rs) it re-exports. ``mlscurv.dask`` is Python, typed in its source."""
 
 import os
 from typing import (

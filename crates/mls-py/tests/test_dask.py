@@ -1,0 +1,225 @@
+"""`mlscurv.dask` on a LocalCluster of two worker processes: the tiled graph gives the single
+call's numbers bit for bit (given normals and h), close ones with estimated normals, and the
+single call's errors."""
+
+import doctest
+import pickle
+import re
+import warnings
+
+import numpy as np
+import pytest
+
+dask = pytest.importorskip("dask")
+da = pytest.importorskip("dask.array")
+distributed = pytest.importorskip("distributed")
+
+import mlscurv  # noqa: E402
+import mlscurv.dask  # noqa: E402
+
+SEED = 7
+H = 0.8
+# 64 MiB is the fixed part of a budget and 400 bytes a loaded point: about 5,200 points a
+# tile, so that 60,000 points with their halos need more than 8 tiles.
+SMALL = "66MiB"
+CHUNK = 7_500
+
+
+def terrain(n: int, side: float, seed: int):
+    """Rolling terrain far from the origin, uniformly at random (so in no spatial order),
+    with its exact unit normals."""
+    rng = np.random.default_rng(seed)
+    x, y = rng.uniform(0, side, size=(2, n))
+    z = 2 * np.sin(x / 7) + 1.5 * np.cos(y / 5) + 0.05 * x
+    fx, fy = 2 / 7 * np.cos(x / 7) + 0.05, -1.5 / 5 * np.sin(y / 5)
+    norm = np.sqrt(fx * fx + fy * fy + 1)
+    points = np.column_stack([x + 420_000.0, y + 5_100_000.0, z + 300.0])
+    return points, np.column_stack([-fx / norm, -fy / norm, 1 / norm])
+
+
+@pytest.fixture(scope="module")
+def client():
+    with distributed.LocalCluster(
+        n_workers=2, processes=True, threads_per_worker=1, dashboard_address=None
+    ) as cluster, distributed.Client(cluster) as c:
+        yield c
+
+
+@pytest.fixture(scope="module")
+def cloud():
+    return terrain(60_000, 150.0, SEED)
+
+
+def assert_same(lazy: dict, whole, bitwise: bool = True):
+    (got,) = dask.compute(lazy)
+    assert set(got) == {"points"} | {k for k in dir(whole) if not k.startswith("_")} - {
+        "scale", "scale_source", "normals_source", "timings", "warnings", "keys", "to_dict",
+    }
+    for name, value in got.items():
+        expected = getattr(whole, name)
+        assert value.dtype == expected.dtype and value.shape == expected.shape, name
+        assert np.array_equal(value, expected, equal_nan=True), name
+
+
+def test_plan_has_many_tiles_and_complete_halos(cloud):
+    """The plan the graph uses: at least 8 tiles here; every tile loads every point within the
+    reach of its own points (checked by brute force on a subset), and it survives pickling."""
+    points, normals = cloud
+    dp = da.from_array(points, chunks=CHUNK)
+    capacity = mlscurv._mlscurv._capacity(mlscurv._mlscurv._parse_size(SMALL))
+    plan, *_ = mlscurv.dask._plan(
+        dp, None, h=H, cutoff=5.0, method="jet", capacity=capacity,
+        max_cells=mlscurv.dask.MAX_CELLS,
+    )
+    assert len(plan) >= 8
+    again = pickle.loads(pickle.dumps(plan))
+    assert np.array_equal(again.tile_of(points), plan.tile_of(points))
+
+    sample = points[:6_000]
+    own = plan.tile_of(sample)
+    rows, tiles = plan.loads(sample)
+    assert np.all(np.isin(own, np.arange(len(plan))))
+    # The graph's edges from the grid's cells: a superset of the tiles the points need.
+    cells = np.flatnonzero(mlscurv._mlscurv._Grid(
+        points.min(0).tolist(), points.max(0).tolist(), mlscurv.dask.MAX_CELLS
+    ).counts(sample))
+    own_tiles, near_tiles = plan.tiles_of_cells(cells)
+    assert set(own.tolist()) == set(own_tiles.tolist())
+    assert set(tiles.tolist()) <= set(near_tiles.tolist())
+    # Its own tile loads each point.
+    assert {(r, own[r]) for r in range(len(sample))} <= set(zip(rows.tolist(), tiles.tolist()))
+    for t in range(len(plan)):
+        core = sample[own == t]
+        outside = sample[~np.isin(np.arange(len(sample)), rows[tiles == t])]
+        if len(core) == 0 or len(outside) == 0:
+            continue
+        d2 = ((outside[:, None, :] - core[None, :, :]) ** 2).sum(-1).min(axis=1)
+        assert np.sqrt(d2.min()) > plan.reach, t
+
+
+@pytest.mark.parametrize(
+    "method, rows",
+    [("jet", (CHUNK,) * 8), ("paper", (20_000, 1, 14_999, 25_000))],
+)
+def test_equals_the_single_call_bitwise(client, cloud, method, rows):
+    """Eight equal chunks, or uneven ones with a chunk of one point: the single call's bits."""
+    points, normals = cloud
+    lazy = mlscurv.dask.curvature(
+        da.from_array(points, chunks=(rows, 3)),
+        da.from_array(normals, chunks=(rows, 3)),
+        h=H,
+        method=method,
+        memory=SMALL,
+    )
+    assert lazy["k1"].chunks == (rows,)
+    assert_same(lazy, mlscurv.curvature(points, normals, h=H, method=method))
+
+
+def test_files_equal_the_single_call_on_their_concatenation(client, cloud, tmp_path):
+    """Four LAS tiles (strips of the terrain) with normals and an intensity: each output file
+    holds the single call's numbers on the concatenated cloud, and the intensity."""
+    points, normals = cloud
+    rng = np.random.default_rng(SEED)
+    intensity = rng.integers(0, 4096, size=len(points)).astype(np.uint16)
+    strip = np.minimum((points[:, 0] - points[:, 0].min()) // 37.5, 3).astype(int)
+    paths = []
+    for s in range(4):
+        path = tmp_path / f"t{s}.las"
+        take = strip == s
+        mlscurv.write(
+            path, {"points": points[take], "normals": normals[take], "intensity": intensity[take]}
+        )
+        paths.append(path)
+    out = tmp_path / "out"
+    out.mkdir()
+    written = mlscurv.dask.curvature_files(paths, out, h=H, method="paper", memory=SMALL)
+    assert written == [str(out / p.name) for p in paths]
+
+    read = [mlscurv.read(p, attributes=True) for p in paths]
+    whole = mlscurv.curvature(
+        np.concatenate([r[0] for r in read]), np.concatenate([r[1] for r in read]), h=H,
+        method="paper",
+    )
+    first = 0
+    for (p, n, attrs), w in zip(read, written):
+        got_p, got_n, got = mlscurv.read(w, attributes=True)
+        rows = slice(first, first + len(p))
+        first += len(p)
+        assert np.array_equal(got_p, p)
+        assert np.array_equal(got_n, whole.normals[rows], equal_nan=True)
+        for name in ("k1", "k2", "mean", "gauss", "status"):
+            assert np.array_equal(got[name], whole[name][rows], equal_nan=True), name
+        assert np.array_equal(got["d1x"], whole["d1x"][rows], equal_nan=True)
+        assert np.array_equal(got["intensity"], attrs["intensity"])
+    assert first == len(points)
+
+
+def test_estimated_normals_are_close(client, cloud):
+    """Normals estimated per tile from the points within its halo: nearly every k1 is the
+    single call's to 1e-9."""
+    points, _ = cloud
+    lazy = mlscurv.dask.curvature(
+        da.from_array(points, chunks=CHUNK), h=H, orient="up", memory=SMALL
+    )
+    (k1,) = dask.compute(lazy["k1"])
+    whole = mlscurv.curvature(points, h=H, orient="up")
+    close = np.isclose(k1, whole.k1, rtol=1e-9, atol=0, equal_nan=True)
+    assert close.mean() >= 0.99, close.mean()
+
+
+def message(call) -> str:
+    with pytest.raises(ValueError) as e:
+        call()
+    return str(e.value)
+
+
+def test_bad_input_raises_the_single_calls_errors(client, cloud):
+    points, normals = cloud
+    bad = points.copy()
+    bad[23_456, 1] = np.nan
+    expected = message(lambda: mlscurv.curvature(bad, h=H))
+    assert "point 23456 is not finite" in expected
+    got = message(lambda: mlscurv.dask.curvature(da.from_array(bad, chunks=CHUNK), h=H))
+    assert got == expected
+
+    flat = points[:, :2]
+    expected = message(lambda: mlscurv.curvature(flat, h=H))
+    got = message(lambda: mlscurv.dask.curvature(da.from_array(flat, chunks=CHUNK), h=H))
+    assert got == expected
+
+    short = normals[:100]
+    expected = message(lambda: mlscurv.curvature(points, short, h=H))
+    got = message(
+        lambda: mlscurv.dask.curvature(da.from_array(points, chunks=CHUNK), short, h=H)
+    )
+    assert got == expected
+
+    few = points[:3]
+    assert message(lambda: mlscurv.dask.curvature(da.from_array(few), h=H)) == message(
+        lambda: mlscurv.curvature(few, h=H)
+    )
+    for option in (dict(method="spline"), dict(orient="sideways"), dict(h=-1.0)):
+        args = {"h": H, **option}
+        assert message(
+            lambda: mlscurv.dask.curvature(da.from_array(points, chunks=CHUNK), **args)
+        ) == message(lambda: mlscurv.curvature(points, **args))
+    # The paper's untruncated kernel reaches every point (the jet's radius bounds its reach).
+    with pytest.raises(ValueError, match=re.escape("cutoff: a tiled run needs a kernel cutoff")):
+        mlscurv.dask.curvature(
+            da.from_array(points, chunks=CHUNK), h=H, cutoff="none", method="paper"
+        )
+    with pytest.raises(ValueError, match="memory"):
+        mlscurv.dask.curvature(da.from_array(points, chunks=CHUNK), h=H, memory="1MiB")
+
+
+def test_docstring_example():
+    """The example of `mlscurv.dask.curvature` (it starts its own cluster)."""
+    runner = doctest.DocTestRunner(optionflags=doctest.ELLIPSIS | doctest.NORMALIZE_WHITESPACE)
+    tests = doctest.DocTestFinder().find(mlscurv.dask.curvature, "curvature", globs={})
+    assert any(t.examples for t in tests)
+    with warnings.catch_warnings():
+        # Its cluster's dashboard takes another port when the fixture's holds 8787.
+        warnings.simplefilter("ignore", UserWarning)
+        for test in tests:
+            runner.run(test)
+    assert runner.failures == 0
