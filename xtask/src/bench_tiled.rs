@@ -17,7 +17,7 @@ pub(crate) const END: &str = "<!-- /out-of-core -->";
 
 #[derive(Debug)]
 struct Options {
-    /// The largest cloud; the scaling runs use a tenth and a third of it too.
+    /// The largest cloud; the scaling runs use a tenth of it too.
     points: u64,
     memory: String,
     /// Points of the jet's run (the default estimator, slower: a smaller cloud).
@@ -189,7 +189,7 @@ pub(crate) fn run(args: &[String]) -> Result<()> {
     std::fs::create_dir_all(&work)?;
     let exe = build_mlscurv()?;
     let big = o.points;
-    let sizes = [big / 10, big / 3, big];
+    let sizes = [big / 10, big];
     let files: Vec<PathBuf> = sizes
         .iter()
         .map(|&n| generate(&work, n))

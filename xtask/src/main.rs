@@ -37,7 +37,7 @@ Tasks:
   bench [--quick] Throughput, memory and scaling against issue 5's targets; writes
                  docs/benchmarks.md. --quick: small clouds, writes target/bench/quick.md.
   bench-tiled [--quick] [--points N] [--memory SIZE]
-                 Clouds larger than memory: gen-cloud clouds of N/10, N/3 and N points
+                 Clouds larger than memory: gen-cloud clouds of N/10 and N points
                  (default 10^8) tiled in SIZE (default 2GiB) against in-memory runs, the jet
                  tiled, LAZ read + write; writes the out-of-core section of docs/benchmarks.md.
   defaults       The measurements behind mlscurv's defaults (--h-factor, --at); writes docs/defaults.md.

@@ -35,6 +35,8 @@ pub struct LasReader {
     done: u64,
     /// Length of the record without its extra bytes.
     base: usize,
+    /// Length of the whole record.
+    record_len: usize,
     normal_offsets: Option<[usize; 3]>,
     sources: Vec<Source>,
     /// Name and type of each attribute, in the order of `sources`.
@@ -151,6 +153,7 @@ impl LasReader {
             expected,
             done: 0,
             base,
+            record_len: usize::from(format.len()),
             normal_offsets,
             sources,
             columns,
@@ -174,6 +177,11 @@ impl LasReader {
     /// caller that needs it exact measures the points.
     pub fn header_bounds(&self) -> ([f64; 3], [f64; 3]) {
         self.bounds
+    }
+
+    /// Bytes of one point record, extra bytes included.
+    pub fn record_len(&self) -> usize {
+        self.record_len
     }
 
     /// Whether the points have normals (`f64` extra bytes `nx`, `ny`, `nz`).
