@@ -116,15 +116,17 @@ def test_equals_the_single_call_bitwise(client, cloud, method, rows):
 
 
 def test_files_equal_the_single_call_on_their_concatenation(client, cloud, tmp_path):
-    """Four LAS tiles (strips of the terrain) with normals and an intensity: each output file
-    holds the single call's numbers on the concatenated cloud, and the intensity."""
+    """Four LAS tiles (strips of the terrain) with normals and an intensity, and an empty one
+    among them (a survey grid's tile with no points): each output file holds the single
+    call's numbers on the concatenated cloud, and the intensity; the empty one is empty."""
     points, normals = cloud
     rng = np.random.default_rng(SEED)
     intensity = rng.integers(0, 4096, size=len(points)).astype(np.uint16)
     strip = np.minimum((points[:, 0] - points[:, 0].min()) // 37.5, 3).astype(int)
     paths = []
-    for s in range(4):
-        path = tmp_path / f"t{s}.las"
+    # Strip 99 has no points.
+    for i, s in enumerate([0, 1, 99, 2, 3]):
+        path = tmp_path / f"t{i}.las"
         take = strip == s
         mlscurv.write(
             path, {"points": points[take], "normals": normals[take], "intensity": intensity[take]}

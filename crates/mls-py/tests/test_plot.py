@@ -36,7 +36,7 @@ def test_plot_colours_by_the_column_with_a_symmetric_robust_range(tmp_path):
 
 
 def test_plot_refuses_an_unknown_column_or_view():
-    points, normals = sphere(200)
+    points, normals = sphere()
     r = mlscurv.curvature(points, normals)
     with pytest.raises(KeyError, match="not a column"):
         plot(r, "curvedness")

@@ -389,33 +389,47 @@ def curvature_files(
     shapes = dask.compute(
         *[delayed(lambda r: (len(r[0]), r[1] is not None))(r) for r in reads]
     )
-    with_normals = {has for _, has in shapes}
+    # A file without points (an empty tile of a survey grid) is no chunk of the cloud: dask
+    # drops empty blocks, which would shift every later file's rows onto the wrong file. It
+    # gets an empty output.
+    full = [i for i, (n, _) in enumerate(shapes) if n > 0]
+    if not full:
+        _mlscurv._check_count(0)
+    with_normals = {shapes[i][1] for i in full}
     if len(with_normals) > 1:
-        missing = [p for p, (_, has) in zip(paths, shapes) if not has]
+        missing = [paths[i] for i in full if not shapes[i][1]]
         raise ValueError(
             f"{missing[0]}: the file has no normals (nx, ny, nz) but others have; give every "
             "file normals, or none"
         )
     points = da.concatenate(
         [
-            da.from_delayed(delayed(lambda r: r[0])(r), shape=(n, 3), dtype=np.float64)
-            for r, (n, _) in zip(reads, shapes)
+            da.from_delayed(delayed(lambda r: r[0])(reads[i]), shape=(shapes[i][0], 3), dtype=np.float64)
+            for i in full
         ]
     )
     normals = None
     if with_normals == {True}:
         normals = da.concatenate(
             [
-                da.from_delayed(delayed(lambda r: r[1])(r), shape=(n, 3), dtype=np.float64)
-                for r, (n, _) in zip(reads, shapes)
+                da.from_delayed(
+                    delayed(lambda r: r[1])(reads[i]), shape=(shapes[i][0], 3), dtype=np.float64
+                )
+                for i in full
             ]
         )
-    _, chunks, offsets, _ = _graph(
+    _, chunks, offsets, names = _graph(
         points, normals, h=h, cutoff=cutoff, method=method, orient=orient, memory=memory,
         max_cells=max_cells, threads=threads,
     )
+    chunk_of = dict(zip(full, chunks))
+    empty = {
+        k: np.empty((0, 3) if k in _VECTORS else (0,), np.int32 if k == "status" else np.float64)
+        for k in names
+    }
     writes = [
-        delayed(_write)(p, o, c) for p, o, c in zip(paths, outs, chunks)
+        delayed(_write)(p, o, chunk_of.get(i, empty))
+        for i, (p, o) in enumerate(zip(paths, outs))
     ]
     if compute:
         return list(dask.compute(*writes))
