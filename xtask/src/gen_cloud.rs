@@ -159,11 +159,10 @@ pub(crate) fn run(options: &Options) -> Result<()> {
             } else {
                 tile_path(&options.output, r, c)
             };
-            let min = [
-                area.min.x + f64::from(c) * tile_w,
-                area.min.y + f64::from(r) * tile_h,
-                area.min.z,
-            ];
+            // One offset for every tile, the area's minimum: a point's stored coordinates are
+            // then the same in a tile as in the whole cloud's file, so runs over the tiles and
+            // over the whole file see the same points (bit for bit).
+            let min = [area.min.x, area.min.y, area.min.z];
             let opened = open(&path, min, compressed, options.normals);
             match opened {
                 Ok(tile) => tiles.push(tile),
@@ -232,7 +231,8 @@ fn tile_path(output: &Path, r: u32, c: u32) -> PathBuf {
     output.with_file_name(format!("{stem}_r{r}_c{c}.{ext}"))
 }
 
-/// Creates a tile's file with the LAS 1.4 point format 6 header, offset at `min`.
+/// Creates a tile's file with the LAS 1.4 point format 6 header, offset at `min` (the whole
+/// area's, for every tile).
 fn open(path: &Path, min: [f64; 3], compressed: bool, normals: bool) -> Result<Tile> {
     let mut builder = Builder::from(Version::new(1, 4));
     let mut format = Format::new(6).context("point format 6")?;

@@ -385,7 +385,9 @@ def curvature_files(
         outs = [os.fspath(o) for o in out]
         if len(outs) != len(paths):
             raise ValueError(f"out: {len(outs)} paths for {len(paths)} inputs; give one per input")
-    reads = [delayed(_read, pure=True)(p) for p in paths]
+    # Read once and kept in the workers' memory (the cluster's, not this machine's): the
+    # plan's passes (check, counts, split) would otherwise each decompress every file again.
+    reads = list(dask.persist(*[delayed(_read, pure=True)(p) for p in paths]))
     shapes = dask.compute(
         *[delayed(lambda r: (len(r[0]), r[1] is not None))(r) for r in reads]
     )
