@@ -227,10 +227,12 @@ pub(crate) fn run(args: &[String]) -> Result<()> {
     };
     let mut md = render(&env, &stages, &cutoffs, &threads, &ad, &cli);
     if !quick {
-        // bench-tiled's section is kept: it takes much longer to measure.
+        // The out-of-core and Dask sections are kept: they take much longer to measure.
         let old = std::fs::read_to_string("docs/benchmarks.md").unwrap_or_default();
-        if let Some(section) = crate::bench_tiled::section(&old) {
-            md = crate::bench_tiled::replace_section(&md, section);
+        for markers in crate::bench_tiled::KEPT {
+            if let Some(section) = crate::bench_tiled::section(&old, markers) {
+                md = crate::bench_tiled::replace_section(&md, markers, section);
+            }
         }
     }
     let out = if quick {
