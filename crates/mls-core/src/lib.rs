@@ -19,6 +19,7 @@ pub mod adaptive;
 pub mod curvature;
 pub mod error;
 pub mod field;
+mod frame;
 pub mod jet;
 pub mod kernel;
 pub mod kernels;
