@@ -36,10 +36,11 @@ Tasks:
                  cargo-fuzz reader target for SECONDS. Writes target/robustness/report.md.
   bench [--quick] Throughput, memory and scaling against issue 5's targets; writes
                  docs/benchmarks.md. --quick: small clouds, writes target/bench/quick.md.
-  bench-tiled [--quick] [--points N] [--memory SIZE]
+  bench-tiled [--quick] [--points N] [--memory SIZE] [--io-only]
                  Clouds larger than memory: gen-cloud clouds of N/10 and N points
                  (default 10^8) tiled in SIZE (default 2GiB) against in-memory runs, the jet
                  tiled, LAZ read + write; writes the out-of-core section of docs/benchmarks.md.
+                 --io-only: the LAZ read + write timing alone, replacing its line there.
   defaults       The measurements behind mlscurv's defaults (--h-factor, --at); writes docs/defaults.md.
   paper [--quick] [--check]
                  The paper's Tables 1-2, Figure 8, h and cutoff studies, adaptive h and figures;
