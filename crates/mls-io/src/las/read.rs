@@ -14,8 +14,9 @@ use crate::error::{ReadError, quoted};
 use crate::{MAX_PREALLOCATED, PointCloud, ReadOutcome};
 
 /// Points read per call to the `las` reader: bounded, so a header that claims too many points
-/// costs no memory until they arrive.
-const CHUNK_POINTS: u64 = 1 << 16;
+/// costs no memory until they arrive, and several LAZ chunks (50,000 points each, usually)
+/// long, so that the codec decompresses them on several threads.
+const CHUNK_POINTS: u64 = 1 << 18;
 
 /// Where each attribute comes from in a record.
 #[derive(Debug)]

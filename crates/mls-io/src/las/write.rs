@@ -14,8 +14,9 @@ use crate::attributes::{AttributeData, Scalar};
 use crate::error::WriteError;
 use crate::write::{Column, ColumnData, validate};
 
-/// Points encoded per call to the `las` writer.
-const CHUNK_POINTS: usize = 1 << 16;
+/// Points encoded per call to the `las` writer: several LAZ chunks, which the codec then
+/// compresses on several threads.
+const CHUNK_POINTS: usize = 1 << 18;
 
 /// The plan of a LAS file for a table: the coordinate columns, the columns that go into
 /// standard fields, the extra-bytes columns and the header.
