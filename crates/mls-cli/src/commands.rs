@@ -3,11 +3,11 @@
 
 use std::path::Path;
 
-use anyhow::{Context, Result};
+use anyhow::Result;
 use mls_cli::evaluate::{self, vector_columns};
 use mls_cli::pipeline::{self, Built, Carried, Prepared, Timings};
 use mls_cli::{At, CurvatureOptions, Method};
-use mls_core::{AdaptiveConfig, MlsConfig, MlsSurface, Parallelism, Point, Vector};
+use mls_core::{AdaptiveConfig, Parallelism, Point};
 use mls_io::Column;
 
 use crate::{CurvatureArgs, EvalArgs, NormalsArgs, OutputArgs, ProjectArgs, interactive};
@@ -328,92 +328,22 @@ fn eval_with(a: &EvalArgs, output: &pipeline::Output) -> Result<()> {
         pipeline::read_quietly(&a.queries, a.formats.input_format)
     })?;
     let points = pipeline::to_points(&cloud);
-    let par = Parallelism::Rayon;
-    let scale = t.time("spacing", || {
-        pipeline::choose_h(
-            &points,
-            a.h,
-            mls_core::normals::DEFAULT_H_FACTOR,
-            par,
-            &cloud_name,
-        )
-    })?;
-    let h = scale.h;
-    for w in pipeline::check_scale(&points, &scale, a.cutoff, &cloud_name)? {
-        pipeline::print_warning(w);
-    }
-    let normals: Vec<Vector> = file_normals.iter().map(|n| Vector::from(*n)).collect();
-    let surface = t.time("index", || {
-        MlsSurface::new(
-            &points,
-            &normals,
-            MlsConfig {
-                cutoff: a.cutoff,
-                ..MlsConfig::new(h)
-            },
-        )
-        .with_context(|| cloud_name.clone())
-    })?;
+    let (scale, surface) = pipeline::eval_surface(
+        &points,
+        file_normals,
+        a.h,
+        a.cutoff,
+        &cloud_name,
+        &mut t,
+        pipeline::print_warning,
+    )?;
     let q: Vec<Point> = queries.points.iter().map(|p| Point::from(*p)).collect();
-    let results = t.time("evaluation", || surface.curvature_at_points(&q, par));
-    const NAMES: [&str; 21] = [
-        "x", "y", "z", "g", "gx", "gy", "gz", "hxx", "hxy", "hxz", "hyy", "hyz", "hzz", "nx", "ny",
-        "nz", "k1", "k2", "mean", "gauss", "status",
-    ];
-    let mut cols: Vec<Vec<f64>> = (0..20).map(|_| Vec::with_capacity(q.len())).collect();
-    let mut status = Vec::with_capacity(q.len());
-    for (r, p) in results.iter().zip(&q) {
-        status.push(mls_cli::status_code(r));
-        let row: [f64; 20] = match r {
-            Ok(sp) => {
-                // Undo the underflow shift: these are the true g, ∇g and H (0 where they underflow).
-                let s = (-sp.implicit.log_scale).exp();
-                let (g, gr, hs, c) = (
-                    sp.implicit.value * s,
-                    sp.implicit.gradient * s,
-                    sp.implicit.hessian * s,
-                    sp.curvature,
-                );
-                let n = sp.implicit.field.normal;
-                [
-                    p.x,
-                    p.y,
-                    p.z,
-                    g,
-                    gr.x,
-                    gr.y,
-                    gr.z,
-                    hs[(0, 0)],
-                    hs[(0, 1)],
-                    hs[(0, 2)],
-                    hs[(1, 1)],
-                    hs[(1, 2)],
-                    hs[(2, 2)],
-                    n.x,
-                    n.y,
-                    n.z,
-                    c.k1,
-                    c.k2,
-                    c.mean,
-                    c.gauss,
-                ]
-            }
-            Err(_) => {
-                let mut row = [f64::NAN; 20];
-                row[..3].copy_from_slice(&[p.x, p.y, p.z]);
-                row
-            }
-        };
-        for (c, v) in cols.iter_mut().zip(row) {
-            c.push(v);
-        }
-    }
-    let mut columns: Vec<Column<'_>> = NAMES[..20]
-        .iter()
-        .zip(&cols)
-        .map(|(name, c)| Column::f64(name, c))
-        .collect();
-    columns.push(Column::i32("status", &status));
+    let results = t.time("evaluation", || {
+        surface.curvature_at_points(&q, Parallelism::Rayon)
+    });
+    let table = evaluate::EvalTable::new(&results, &q);
+    let status = &table.status;
+    let columns = table.columns();
     // Attributes belong to the cloud's points, not to the queries.
     t.time("write", || output.write(&columns, false, None))?;
     if !a.run.quiet {
@@ -426,7 +356,7 @@ fn eval_with(a: &EvalArgs, output: &pipeline::Output) -> Result<()> {
         );
         eprintln!("  h               {}", scale.describe("--h"));
         eprintln!("  cutoff          {}", cutoff_text(a.cutoff));
-        eprintln!("  status          {}", pipeline::status_counts(&status));
+        eprintln!("  status          {}", pipeline::status_counts(status));
         print_timings(&t, q.len());
         eprintln!("  wrote           {}", output.name());
     }

@@ -321,3 +321,85 @@ pub fn normals_columns(normals: &[Option<Vector>]) -> (Vec<[f64; 3]>, Vec<i32>) 
         .collect();
     (nrm, status)
 }
+
+/// The columns of `mlscurv eval`, in order: the query, g, ∇g, H's six distinct entries, the
+/// normal field, the curvatures and the status.
+pub const EVAL_COLUMNS: [&str; 21] = [
+    "x", "y", "z", "g", "gx", "gy", "gz", "hxx", "hxy", "hxz", "hyy", "hyz", "hzz", "nx", "ny",
+    "nz", "k1", "k2", "mean", "gauss", "status",
+];
+
+/// The table of `mlscurv eval`: one column of values per name of [`EVAL_COLUMNS`] but the
+/// status, and the status codes. A failed query keeps its coordinates and has NaN elsewhere.
+#[derive(Debug)]
+pub struct EvalTable {
+    pub values: Vec<Vec<f64>>,
+    pub status: Vec<i32>,
+}
+
+impl EvalTable {
+    /// The table of `results` at `queries`.
+    pub fn new(results: &[PointResult], queries: &[Point]) -> Self {
+        let mut values: Vec<Vec<f64>> =
+            (0..20).map(|_| Vec::with_capacity(queries.len())).collect();
+        let mut status = Vec::with_capacity(queries.len());
+        for (r, p) in results.iter().zip(queries) {
+            status.push(status_code(r));
+            let row: [f64; 20] = match r {
+                Ok(sp) => {
+                    // Undo the underflow shift: the true g, ∇g and H (0 where they underflow).
+                    let s = (-sp.implicit.log_scale).exp();
+                    let (g, gr, hs, c) = (
+                        sp.implicit.value * s,
+                        sp.implicit.gradient * s,
+                        sp.implicit.hessian * s,
+                        sp.curvature,
+                    );
+                    let n = sp.implicit.field.normal;
+                    [
+                        p.x,
+                        p.y,
+                        p.z,
+                        g,
+                        gr.x,
+                        gr.y,
+                        gr.z,
+                        hs[(0, 0)],
+                        hs[(0, 1)],
+                        hs[(0, 2)],
+                        hs[(1, 1)],
+                        hs[(1, 2)],
+                        hs[(2, 2)],
+                        n.x,
+                        n.y,
+                        n.z,
+                        c.k1,
+                        c.k2,
+                        c.mean,
+                        c.gauss,
+                    ]
+                }
+                Err(_) => {
+                    let mut row = [f64::NAN; 20];
+                    row[..3].copy_from_slice(&[p.x, p.y, p.z]);
+                    row
+                }
+            };
+            for (c, v) in values.iter_mut().zip(row) {
+                c.push(v);
+            }
+        }
+        Self { values, status }
+    }
+
+    /// The table as written.
+    pub fn columns(&self) -> Vec<Column<'_>> {
+        let mut columns: Vec<Column<'_>> = EVAL_COLUMNS[..20]
+            .iter()
+            .zip(&self.values)
+            .map(|(name, c)| Column::f64(name, c))
+            .collect();
+        columns.push(Column::i32("status", &self.status));
+        columns
+    }
+}

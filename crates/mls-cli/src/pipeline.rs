@@ -364,6 +364,40 @@ pub fn choose_h(
     })
 }
 
+/// The surface `mlscurv eval` evaluates: the cloud's own `normals` (every one non-zero), h
+/// given or from the spacing (the default factor), checked against the cloud (its warnings
+/// passed to `warn`), the kernel truncated at `cutoff`.
+pub fn eval_surface(
+    points: &[Point],
+    normals: &[[f64; 3]],
+    h: Option<f64>,
+    cutoff: Cutoff,
+    file: &str,
+    t: &mut Timings,
+    mut warn: impl FnMut(String),
+) -> Result<(Scale, MlsSurface)> {
+    let par = Parallelism::Rayon;
+    let scale = t.time("spacing", || {
+        choose_h(points, h, mls_core::normals::DEFAULT_H_FACTOR, par, file)
+    })?;
+    for w in check_scale(points, &scale, cutoff, file)? {
+        warn(w);
+    }
+    let normals: Vec<Vector> = normals.iter().map(|n| Vector::from(*n)).collect();
+    let surface = t.time("index", || {
+        MlsSurface::new(
+            points,
+            &normals,
+            MlsConfig {
+                cutoff,
+                ..MlsConfig::new(scale.h)
+            },
+        )
+        .with_context(|| file.to_owned())
+    })?;
+    Ok((scale, surface))
+}
+
 /// Oriented normals, one per point (`None` where none could be had), and their source.
 #[derive(Debug)]
 pub struct Normals {

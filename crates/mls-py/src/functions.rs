@@ -386,3 +386,121 @@ pub(crate) fn project<'py>(
     ];
     Ok(Table::new("project", names(&XYZ_N_STATUS), arrays, summary))
 }
+
+/// g, its gradient and Hessian, the normal field and the curvature of the MLS surface of an
+/// oriented cloud at query points, as ``mlscurv eval`` computes them (the paper's closed form
+/// at each query, which need not lie on the surface).
+///
+/// Parameters
+/// ----------
+/// points : array_like, shape (N, 3)
+///     The cloud (at least 4 finite points).
+/// normals : array_like, shape (N, 3)
+///     Its oriented normals (non-zero; normalised here).
+/// queries : array_like, shape (M, 3)
+///     Where to evaluate (finite; any number).
+/// h : float, optional
+///     The scale (default: 2 × the median local spacing, as the command).
+/// cutoff : float or "none"
+///     The kernel's truncation in units of h (default 5).
+/// threads : int, optional
+///     Worker threads (default: all cores).
+///
+/// Returns
+/// -------
+/// Result
+///     ``points`` (the queries), ``g``, ``gx`` … ``gz``, ``hxx`` … ``hzz``, ``normals`` (the
+///     normal field n), ``k1``, ``k2``, ``mean``, ``gauss`` and ``status``: the command's columns
+///     ``x y z g gx gy gz hxx hxy hxz hyy hyz hzz nx ny nz k1 k2 mean gauss status``.
+///
+/// Examples
+/// --------
+/// >>> import numpy as np, mlscurv
+/// >>> i = np.arange(4000) + 0.5
+/// >>> z = 1 - 2 * i / 4000; t = np.pi * (1 + 5 ** 0.5) * i; r = np.sqrt(1 - z * z)
+/// >>> sphere = np.column_stack([r * np.cos(t), r * np.sin(t), z])
+/// >>> e = mlscurv.eval(sphere, sphere, [[0.0, 0.0, 1.0], [0.0, 0.0, 1.02]])
+/// >>> np.round(e.k1, 2).tolist(), e.status.tolist()
+/// ([1.0, 0.99], [0, 0])
+#[pyfunction]
+#[pyo3(signature = (points, normals, queries, *, h=None, cutoff=Some(CutoffArg::Factor(5.0)), threads=None))]
+#[pyo3(text_signature = "(points, normals, queries, *, h=None, cutoff=5.0, threads=None)")]
+pub(crate) fn eval<'py>(
+    py: Python<'py>,
+    points: &Bound<'py, PyAny>,
+    normals: &Bound<'py, PyAny>,
+    queries: &Bound<'py, PyAny>,
+    h: Option<f64>,
+    cutoff: Option<CutoffArg>,
+    threads: Option<usize>,
+) -> PyResult<Table> {
+    let (h, _) = scale_options(h, None)?;
+    let cutoff = crate::cutoff(cutoff)?;
+    let threads = crate::threads(threads)?;
+    let Input { array, normals } = Input::new(points, Some(normals))?;
+    let normals = normals.unwrap_or_default();
+    let queries = crate::coordinates(queries, "queries")?;
+    let readonly = array.readonly();
+    let points = as_points(readonly.as_slice().map_err(to_value_error)?);
+    let points: &[Point] = &points;
+    let q_readonly = queries.readonly();
+    let q_flat = q_readonly.as_slice().map_err(to_value_error)?;
+    crate::check_finite(q_flat, "queries", "query")?;
+    let q = as_points(q_flat);
+    let q: &[Point] = &q;
+    let (table, summary) = py
+        .detach(|| {
+            pipeline::with_threads(threads, || {
+                let mut t = Timings::default();
+                let mut warnings = Vec::new();
+                let (scale, surface) =
+                    pipeline::eval_surface(points, &normals, h, cutoff, POINTS, &mut t, |w| {
+                        warnings.push(w)
+                    })?;
+                let results = t.time("evaluation", || {
+                    surface.curvature_at_points(q, Parallelism::Rayon)
+                });
+                let table = evaluate::EvalTable::new(&results, q);
+                let summary = Summary {
+                    scale,
+                    normals_source: "given".to_owned(),
+                    timings: t,
+                    warnings,
+                };
+                Ok((table, summary))
+            })
+        })
+        .map_err(pipeline_error)?;
+    drop(readonly);
+    drop(q_readonly);
+    warn(py, &summary.warnings)?;
+    let evaluate::EvalTable { values, status } = table;
+    let mut values = values.into_iter();
+    let mut take = |k: usize| -> Vec<Vec<f64>> { values.by_ref().take(k).collect() };
+    let xyz = take(3);
+    let scalars_before = take(10);
+    let n = take(3);
+    let curvature = take(4);
+    let triple = |c: &[Vec<f64>]| -> Vec<[f64; 3]> {
+        (0..c[0].len())
+            .map(|i| [c[0][i], c[1][i], c[2][i]])
+            .collect()
+    };
+    let mut arrays = vec![
+        ("points", vectors(py, triple(&xyz))?),
+        ("normals", vectors(py, triple(&n))?),
+    ];
+    for (name, v) in evaluate::EVAL_COLUMNS[3..13].iter().zip(scalars_before) {
+        arrays.push((name, scalars(py, v)));
+    }
+    for (name, v) in evaluate::EVAL_COLUMNS[16..20].iter().zip(curvature) {
+        arrays.push((name, scalars(py, v)));
+    }
+    arrays.push(("status", scalars(py, status)));
+    Ok(Table::new(
+        "eval",
+        names(&evaluate::EVAL_COLUMNS),
+        arrays,
+        summary,
+    ))
+}

@@ -330,6 +330,7 @@ fn _mlscurv(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(functions::curvature, m)?)?;
     m.add_function(wrap_pyfunction!(functions::normals, m)?)?;
     m.add_function(wrap_pyfunction!(functions::project, m)?)?;
+    m.add_function(wrap_pyfunction!(functions::eval, m)?)?;
     m.add_function(wrap_pyfunction!(files::read, m)?)?;
     m.add_function(wrap_pyfunction!(files::write, m)?)?;
     m.add_class::<result::Table>()?;

@@ -111,3 +111,20 @@ def test_csv_output_equals_cli(cloud_file, run_cli, tmp_path):
     mine = tmp_path / "mine.csv"
     mlscurv.write(mine, mlscurv.curvature(points, method="paper"))
     assert mine.read_bytes() == out.read_bytes()
+
+
+def test_eval_equals_cli(run_cli, tmp_path):
+    """``eval`` at points on and off the surface (and one far away, which fails): the
+    command's table, bit for bit."""
+    points = sphere(3000, seed=5)
+    cloud = tmp_path / "cloud.ply"
+    queries = np.vstack([points[:50] * 1.01, points[50:100] * 0.97, [[40.0, 0.0, 0.0]]])
+    qfile = tmp_path / "queries.ply"
+    mlscurv.write(cloud, {"points": points, "normals": points})
+    mlscurv.write(qfile, queries)
+    out = tmp_path / "eval.ply"
+    run_cli("eval", "--cloud", cloud, "--queries", qfile, "-o", out, "--h", 0.12, "--quiet")
+    result = mlscurv.eval(points, points, queries, h=0.12)
+    assert result.keys() == list(read_ply_table(out).keys())
+    assert_same_table(result, out)
+    assert result.status[-1] != 0 and np.isnan(result.k1[-1])

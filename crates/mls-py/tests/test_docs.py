@@ -11,7 +11,7 @@ def test_docstring_examples(monkeypatch):
     monkeypatch.chdir(REPO)
     finder = doctest.DocTestFinder()
     runner = doctest.DocTestRunner(optionflags=doctest.ELLIPSIS | doctest.NORMALIZE_WHITESPACE)
-    for name in ("curvature", "normals", "project", "read", "write"):
+    for name in ("curvature", "eval", "normals", "project", "read", "write"):
         tests = finder.find(getattr(mlscurv, name), name, globs={})
         assert any(t.examples for t in tests), name
         for test in tests:
@@ -20,7 +20,7 @@ def test_docstring_examples(monkeypatch):
 
 
 def test_every_function_has_a_docstring_and_signature():
-    for name in ("curvature", "normals", "project", "read", "write"):
+    for name in ("curvature", "eval", "normals", "project", "read", "write"):
         f = getattr(mlscurv, name)
         assert "Examples" in f.__doc__, name
         assert f.__text_signature__, name

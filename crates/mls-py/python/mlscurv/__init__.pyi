@@ -124,6 +124,19 @@ def project(
 ) -> Result:
     """The points projected onto the MLS surface, with its normals, as ``mlscurv project``."""
 
+def eval(
+    points: npt.ArrayLike,
+    normals: npt.ArrayLike,
+    queries: npt.ArrayLike,
+    *,
+    h: Optional[float] = None,
+    cutoff: Cutoff = 5.0,
+    threads: Optional[int] = None,
+) -> Result:
+    """g, ∇g, H, the normal field and the curvature of the MLS surface of an oriented cloud at
+    query points, as ``mlscurv eval`` (columns ``x y z g gx gy gz hxx hxy hxz hyy hyz hzz nx ny
+    nz k1 k2 mean gauss status``)."""
+
 @overload
 def read(
     path: PathLike,
