@@ -121,7 +121,7 @@ pub(crate) fn curvature<'py>(
     let readonly = array.readonly();
     let points = as_points(readonly.as_slice().map_err(to_value_error)?);
     let points: &[Point] = &points;
-    let (out, summary) = py
+    let (mut out, summary) = py
         .detach(|| {
             pipeline::with_threads(threads, || {
                 let mut t = Timings::default();
@@ -158,46 +158,9 @@ pub(crate) fn curvature<'py>(
     drop(readonly);
     warn(py, &summary.warnings)?;
     let columns: Vec<String> = out.columns(&[]).iter().map(|c| c.name.to_owned()).collect();
-    let CurvatureColumns {
-        normal,
-        k1,
-        k2,
-        mean,
-        gauss,
-        d1,
-        d2,
-        status,
-        h,
-        noise,
-        k1_sd,
-        k2_sd,
-        projected,
-        adaptive,
-        jet,
-    } = out;
-    let positions = match projected {
-        Some(p) => vectors(py, p)?,
-        None => array.into_any().unbind(),
-    };
-    let mut arrays = vec![
-        ("points", positions),
-        ("normals", vectors(py, normal)?),
-        ("k1", scalars(py, k1)),
-        ("k2", scalars(py, k2)),
-        ("mean", scalars(py, mean)),
-        ("gauss", scalars(py, gauss)),
-        ("d1", vectors(py, d1)?),
-        ("d2", vectors(py, d2)?),
-    ];
-    if adaptive {
-        arrays.push(("h", scalars(py, h)));
-        arrays.push(("noise", scalars(py, noise)));
-    }
-    if jet {
-        arrays.push(("k1_sd", scalars(py, k1_sd)));
-        arrays.push(("k2_sd", scalars(py, k2_sd)));
-    }
-    arrays.push(("status", scalars(py, status)));
+    let positions = out.projected.take().map(|p| vectors(py, p)).transpose()?;
+    let positions = positions.unwrap_or_else(|| array.into_any().unbind());
+    let arrays = curvature_arrays(py, out, positions)?;
     Ok(Table::new("curvature", columns, arrays, summary))
 }
 
@@ -503,4 +466,50 @@ pub(crate) fn eval<'py>(
         arrays,
         summary,
     ))
+}
+
+/// The arrays of a `curvature` result from the command's columns, the points evaluated at
+/// given as `positions`.
+pub(crate) fn curvature_arrays(
+    py: Python<'_>,
+    out: CurvatureColumns,
+    positions: Py<PyAny>,
+) -> PyResult<Vec<(&'static str, Py<PyAny>)>> {
+    let CurvatureColumns {
+        normal,
+        k1,
+        k2,
+        mean,
+        gauss,
+        d1,
+        d2,
+        status,
+        h,
+        noise,
+        k1_sd,
+        k2_sd,
+        adaptive,
+        jet,
+        ..
+    } = out;
+    let mut arrays = vec![
+        ("points", positions),
+        ("normals", vectors(py, normal)?),
+        ("k1", scalars(py, k1)),
+        ("k2", scalars(py, k2)),
+        ("mean", scalars(py, mean)),
+        ("gauss", scalars(py, gauss)),
+        ("d1", vectors(py, d1)?),
+        ("d2", vectors(py, d2)?),
+    ];
+    if adaptive {
+        arrays.push(("h", scalars(py, h)));
+        arrays.push(("noise", scalars(py, noise)));
+    }
+    if jet {
+        arrays.push(("k1_sd", scalars(py, k1_sd)));
+        arrays.push(("k2_sd", scalars(py, k2_sd)));
+    }
+    arrays.push(("status", scalars(py, status)));
+    Ok(arrays)
 }

@@ -3,7 +3,6 @@
 //! `mls_cli::tiled`, so that the Dask graph and the binary's out-of-core run cut a cloud by
 //! the same rules (written once, in Rust).
 
-use mls_cli::evaluate::CurvatureColumns;
 use mls_cli::tiled::{self, TileResult};
 use mls_cli::{At, CurvatureOptions, Method, NormalsMode, SurfaceOptions, pipeline};
 use mls_core::normals::DEFAULT_H_FACTOR;
@@ -14,7 +13,7 @@ use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyTuple;
 
-use crate::result::{Table, scalars, vectors};
+use crate::result::{Table, vectors};
 use crate::{
     CutoffArg, POINTS, Summary, as_points, check_finite_from, coordinates, file_normals,
     pipeline_error, to_value_error,
@@ -444,35 +443,7 @@ pub(crate) fn _tile_curvature<'py>(
         .filter_map(|(p, &c)| c.then_some(p.coords.into()))
         .collect();
     let columns: Vec<String> = out.columns(&[]).iter().map(|c| c.name.to_owned()).collect();
-    let CurvatureColumns {
-        normal,
-        k1,
-        k2,
-        mean,
-        gauss,
-        d1,
-        d2,
-        status,
-        k1_sd,
-        k2_sd,
-        jet,
-        ..
-    } = out;
-    let mut arrays = vec![
-        ("points", vectors(py, queries)?),
-        ("normals", vectors(py, normal)?),
-        ("k1", scalars(py, k1)),
-        ("k2", scalars(py, k2)),
-        ("mean", scalars(py, mean)),
-        ("gauss", scalars(py, gauss)),
-        ("d1", vectors(py, d1)?),
-        ("d2", vectors(py, d2)?),
-    ];
-    if jet {
-        arrays.push(("k1_sd", scalars(py, k1_sd)));
-        arrays.push(("k2_sd", scalars(py, k2_sd)));
-    }
-    arrays.push(("status", scalars(py, status)));
+    let arrays = crate::functions::curvature_arrays(py, out, vectors(py, queries)?)?;
     let summary = Summary {
         scale: pipeline::Scale {
             h,

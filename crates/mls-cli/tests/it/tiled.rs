@@ -56,6 +56,15 @@ fn tiles(stderr: &str) -> usize {
     line.split_whitespace().nth(1).unwrap().parse().unwrap()
 }
 
+/// The two files hold the same bytes.
+#[track_caller]
+fn assert_same_bytes(a: &Path, b: &Path) {
+    let (a, b) = (std::fs::read(a).unwrap(), std::fs::read(b).unwrap());
+    assert_eq!(a.len(), b.len(), "file sizes differ");
+    let first = a.iter().zip(&b).position(|(x, y)| x != y);
+    assert_eq!(first, None, "files differ from byte {first:?}");
+}
+
 fn curvature(input: &Path, output: &Path, extra: &[&str]) -> crate::common::Run {
     run_ok(
         mlscurv()
@@ -86,13 +95,7 @@ fn tiled_runs_equal_the_in_memory_run_bitwise() {
         &[&options[..], &["--memory", SMALL_BUDGET]].concat(),
     );
     assert!(tiles(&r.stderr) >= 16, "{}", r.stderr);
-    let (a, b) = (
-        std::fs::read(&whole).unwrap(),
-        std::fs::read(&tiled).unwrap(),
-    );
-    assert_eq!(a.len(), b.len(), "file sizes differ");
-    let first = a.iter().zip(&b).position(|(x, y)| x != y);
-    assert_eq!(first, None, "files differ from byte {first:?}");
+    assert_same_bytes(&whole, &tiled);
     let left: Vec<_> = listing(dir.path())
         .into_iter()
         .filter(|n| n.to_string_lossy().starts_with('.'))
@@ -119,13 +122,7 @@ fn two_million_points_in_sixteen_tiles_are_bitwise_the_in_memory_run() {
         &[&options[..], &["--memory", "110MiB"]].concat(),
     );
     assert!(tiles(&r.stderr) >= 16, "{}", r.stderr);
-    let (a, b) = (
-        std::fs::read(&whole).unwrap(),
-        std::fs::read(&tiled).unwrap(),
-    );
-    assert_eq!(a.len(), b.len(), "file sizes differ");
-    let first = a.iter().zip(&b).position(|(x, y)| x != y);
-    assert_eq!(first, None, "files differ from byte {first:?}");
+    assert_same_bytes(&whole, &tiled);
 }
 
 /// Estimated normals are estimated and oriented per tile: the overlaps agree, and the
