@@ -381,32 +381,35 @@ impl TilePlan {
     /// Calls `f` with every tile whose box lies within the reach of `p` (the tile of `p`
     /// included): the tiles that load `p`.
     pub fn tiles_near(&self, p: &Point, mut f: impl FnMut(usize)) {
-        let mut stack = vec![0usize];
-        while let Some(node) = stack.pop() {
-            match self.nodes[node] {
-                Node::Leaf(tile) => {
-                    let t = &self.tiles[tile];
-                    let (lo, hi) = self.grid.world_box(t.start, t.end);
-                    let d2: f64 = (0..3)
-                        .map(|i| (lo[i] - p[i]).max(p[i] - hi[i]).max(0.0).powi(2))
-                        .sum();
-                    if d2 <= self.reach * self.reach {
-                        f(tile);
-                    }
+        // Recursive rather than with a stack of its own: called for every point of a cloud,
+        // twice, it must not allocate; the depth is that of the plan's tree.
+        self.near(0, p, &mut f);
+    }
+
+    fn near(&self, node: usize, p: &Point, f: &mut impl FnMut(usize)) {
+        match self.nodes[node] {
+            Node::Leaf(tile) => {
+                let t = &self.tiles[tile];
+                let (lo, hi) = self.grid.world_box(t.start, t.end);
+                let d2: f64 = (0..3)
+                    .map(|i| (lo[i] - p[i]).max(p[i] - hi[i]).max(0.0).powi(2))
+                    .sum();
+                if d2 <= self.reach * self.reach {
+                    f(tile);
                 }
-                Node::Split {
-                    axis,
-                    at,
-                    left,
-                    right,
-                } => {
-                    let plane = self.grid.lo[axis] + at as f64 * self.grid.cell;
-                    if p[axis] - self.reach < plane {
-                        stack.push(left);
-                    }
-                    if p[axis] + self.reach >= plane {
-                        stack.push(right);
-                    }
+            }
+            Node::Split {
+                axis,
+                at,
+                left,
+                right,
+            } => {
+                let plane = self.grid.lo[axis] + at as f64 * self.grid.cell;
+                if p[axis] - self.reach < plane {
+                    self.near(left, p, f);
+                }
+                if p[axis] + self.reach >= plane {
+                    self.near(right, p, f);
                 }
             }
         }
