@@ -125,7 +125,7 @@ pub(super) fn open_reader(input: &Path) -> Result<LasReader> {
 pub(super) fn for_each_chunk(
     input: &Path,
     with_attributes: bool,
-    mut f: impl FnMut(u64, &mls_io::PointCloud) -> Result<()>,
+    mut f: impl FnMut(u64, mls_io::PointCloud) -> Result<()>,
 ) -> Result<()> {
     let mut reader = open_reader(input)?;
     let mut first = 0u64;
@@ -139,7 +139,7 @@ pub(super) fn for_each_chunk(
         if n == 0 {
             return Ok(());
         }
-        f(first, &chunk)?;
+        f(first, chunk)?;
         first += n as u64;
     }
 }

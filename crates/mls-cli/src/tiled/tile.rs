@@ -310,13 +310,18 @@ pub(super) fn write_output(
             }
             let positions = &chunk.points;
             let columns = out.columns(positions);
-            let mut attributes = chunk.attributes.clone();
-            if !run.keep_attributes {
-                attributes.clear();
-            }
+            // Moved, not copied: the chunk is this call's (empty without attributes).
+            let mut attributes = chunk.attributes;
             // The same names as an in-memory run gives them (`k1` → `k1_in`), noted once.
             let names = renamed.get_or_insert_with(|| {
-                let mut carried = pipeline::Carried::new(attributes.clone(), None, true);
+                let named = attributes
+                    .iter()
+                    .map(|a| mls_io::Attribute {
+                        name: a.name.clone(),
+                        data: mls_io::AttributeData::with_capacity(a.data.ty(), 0),
+                    })
+                    .collect();
+                let mut carried = pipeline::Carried::new(named, None, true);
                 carried.rename_clashes(&columns, run.input);
                 carried.attributes.into_iter().map(|a| a.name).collect()
             });
