@@ -313,7 +313,7 @@ fn best_of<T>(reps: usize, mut f: impl FnMut() -> T) -> (Timing, T) {
 /// CPU time so far of all threads of this process, from the scheduler's nanosecond counters
 /// (`/proc/self/task/*/schedstat`); NaN where unavailable. Under load from other processes
 /// wall-clock rates drop while CPU-time rates do not, so the report shows both.
-fn process_cpu_seconds() -> f64 {
+pub(crate) fn process_cpu_seconds() -> f64 {
     let Ok(tasks) = std::fs::read_dir("/proc/self/task") else {
         return f64::NAN;
     };

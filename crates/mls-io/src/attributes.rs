@@ -144,6 +144,53 @@ macro_rules! each {
     };
 }
 
+/// A number stored little-endian in a fixed number of bytes (LAS records).
+pub(crate) trait Le: Copy {
+    const N: usize;
+    /// From the first `N` bytes of `b`, which has at least `N`.
+    fn read(b: &[u8]) -> Self;
+    /// Into the first `N` bytes of `b`, which has at least `N`.
+    fn write(self, b: &mut [u8]);
+}
+
+macro_rules! le {
+    ($($t:ty),*) => {$(
+        impl Le for $t {
+            const N: usize = size_of::<$t>();
+            fn read(b: &[u8]) -> Self {
+                let mut a = [0; size_of::<$t>()];
+                a.copy_from_slice(&b[..Self::N]);
+                <$t>::from_le_bytes(a)
+            }
+            fn write(self, b: &mut [u8]) {
+                b[..Self::N].copy_from_slice(&self.to_le_bytes());
+            }
+        }
+    )*};
+}
+le!(i8, u8, i16, u16, i32, u32, i64, u64, f32, f64);
+
+/// Appends the value at byte `at` of every `record`-byte record of `raw`; false (nothing
+/// appended) if the value would not fit within a record.
+fn extend_le<T: Le>(v: &mut Vec<T>, raw: &[u8], record: usize, at: usize) -> bool {
+    if at + T::N > record {
+        return false;
+    }
+    v.extend(raw.chunks_exact(record).map(|r| T::read(&r[at..])));
+    true
+}
+
+/// Writes `values` at byte `at` of the successive `record`-byte records of `block`, as many
+/// as both have; nothing if a value would not fit within a record.
+pub(crate) fn scatter_le<T: Le>(values: &[T], block: &mut [u8], record: usize, at: usize) {
+    if at + T::N > record {
+        return;
+    }
+    for (r, &v) in block.chunks_exact_mut(record).zip(values) {
+        v.write(&mut r[at..]);
+    }
+}
+
 impl PartialEq for AttributeData {
     fn eq(&self, other: &Self) -> bool {
         fn floats<T: Copy>(a: &[T], b: &[T], same: impl Fn(T, T) -> bool) -> bool {
@@ -232,6 +279,19 @@ impl AttributeData {
             Self::F32(v) => Scalar::F32(*v.get(i)?),
             Self::F64(v) => Scalar::F64(*v.get(i)?),
         })
+    }
+
+    /// Appends the value stored little-endian at byte `at` of every `record`-byte record of
+    /// `raw`, in this column's type: a whole chunk of LAS records at once. False (nothing
+    /// appended) if it would not fit within a record.
+    pub(crate) fn extend_le(&mut self, raw: &[u8], record: usize, at: usize) -> bool {
+        each!(self, v => extend_le(v, raw, record, at))
+    }
+
+    /// Writes values `first..` little-endian at byte `at` of the successive `record`-byte
+    /// records of `block`, as many as both have.
+    pub(crate) fn scatter_le(&self, first: usize, block: &mut [u8], record: usize, at: usize) {
+        each!(self, v => scatter_le(v.get(first..).unwrap_or_default(), block, record, at));
     }
 
     /// Appends a value of the column's type; false (and nothing appended) for another type.
@@ -349,17 +409,29 @@ impl Scalar {
 
     /// Appends the value little-endian in its own type (LAS extra bytes and point fields).
     pub(crate) fn push_le(self, out: &mut Vec<u8>) {
+        let (bytes, len) = self.le_bytes();
+        out.extend_from_slice(&bytes[..len]);
+    }
+
+    /// The value little-endian in its own type, in the first `len` of eight bytes: no
+    /// allocation, for the encoding of millions of records.
+    pub(crate) fn le_bytes(self) -> ([u8; 8], usize) {
+        fn padded<const N: usize>(b: [u8; N]) -> ([u8; 8], usize) {
+            let mut out = [0; 8];
+            out[..N].copy_from_slice(&b);
+            (out, N)
+        }
         match self {
-            Self::I8(v) => out.extend_from_slice(&v.to_le_bytes()),
-            Self::U8(v) => out.extend_from_slice(&v.to_le_bytes()),
-            Self::I16(v) => out.extend_from_slice(&v.to_le_bytes()),
-            Self::U16(v) => out.extend_from_slice(&v.to_le_bytes()),
-            Self::I32(v) => out.extend_from_slice(&v.to_le_bytes()),
-            Self::U32(v) => out.extend_from_slice(&v.to_le_bytes()),
-            Self::I64(v) => out.extend_from_slice(&v.to_le_bytes()),
-            Self::U64(v) => out.extend_from_slice(&v.to_le_bytes()),
-            Self::F32(v) => out.extend_from_slice(&v.to_le_bytes()),
-            Self::F64(v) => out.extend_from_slice(&v.to_le_bytes()),
+            Self::I8(v) => padded(v.to_le_bytes()),
+            Self::U8(v) => padded(v.to_le_bytes()),
+            Self::I16(v) => padded(v.to_le_bytes()),
+            Self::U16(v) => padded(v.to_le_bytes()),
+            Self::I32(v) => padded(v.to_le_bytes()),
+            Self::U32(v) => padded(v.to_le_bytes()),
+            Self::I64(v) => padded(v.to_le_bytes()),
+            Self::U64(v) => padded(v.to_le_bytes()),
+            Self::F32(v) => padded(v.to_le_bytes()),
+            Self::F64(v) => padded(v.to_le_bytes()),
         }
     }
 

@@ -9,7 +9,6 @@ use std::sync::Mutex;
 use anyhow::{Context, Result};
 use mls_io::LasReader;
 
-use super::CHUNK;
 
 /// The budget in bytes from the machine's available memory (Linux: `MemAvailable`), leaving a
 /// fifth to the rest of the system; `None` where it cannot be read.
@@ -129,13 +128,15 @@ pub(super) fn for_each_chunk(
 ) -> Result<()> {
     let mut reader = open_reader(input)?;
     let mut first = 0u64;
+    // Several LAZ chunks per thread, about 30 MB of points and attributes.
+    let batch = reader.batch_len();
     loop {
-        let mut chunk = reader.empty_cloud(CHUNK as usize);
+        let mut chunk = reader.empty_cloud(batch as usize);
         if !with_attributes {
             // Nothing to decode them into: they are skipped.
             chunk.attributes.clear();
         }
-        let n = reader.read_into(&mut chunk, CHUNK)?;
+        let n = reader.read_into(&mut chunk, batch)?;
         if n == 0 {
             return Ok(());
         }

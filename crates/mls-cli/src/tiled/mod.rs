@@ -52,10 +52,6 @@ pub const FIXED_BYTES: u64 = 64 << 20;
 /// Cells of the counting grid: 8 MB of counts, and boxes of about 100 points on 100M.
 const GRID_CELLS: usize = 1 << 20;
 
-/// Points read (and written) per chunk: several LAZ chunks, decompressed and compressed on
-/// several threads (about 30 MB of points and attributes).
-const CHUNK: u64 = 1 << 18;
-
 /// The spacing is measured on up to [`SPACING_TILES`] tiles of this many points spread over
 /// the cloud: the same sample whatever the budget, once it holds them.
 const SPACING_TILE: u64 = 1 << 18;

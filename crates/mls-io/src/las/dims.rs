@@ -143,10 +143,9 @@ pub(crate) fn encode(record: &mut [u8], f: &Field, value: Scalar) {
         }
         return;
     }
-    let mut bytes = Vec::with_capacity(8);
-    value.push_le(&mut bytes);
-    if let Some(dst) = record.get_mut(f.at..f.at + bytes.len()) {
-        dst.copy_from_slice(&bytes);
+    let (bytes, len) = value.le_bytes();
+    if let Some(dst) = record.get_mut(f.at..f.at + len) {
+        dst.copy_from_slice(&bytes[..len]);
     }
 }
 

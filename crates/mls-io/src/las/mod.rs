@@ -35,6 +35,25 @@ pub(crate) use read::{read, read_stream};
 pub use write::LasSink;
 pub(crate) use write::{write_file, write_file_chunks, write_stream};
 
+/// Points handed to the `las` reader or writer per call, for a LAZ file whose chunks hold
+/// `chunk` points (`None`: uncompressed, or chunks of varying size). The codec works on whole
+/// chunks, one per rayon thread, so a batch of a whole number of chunks per thread keeps every
+/// thread busy to the end of the batch; about 2^18 points bounds the memory a header that
+/// claims too many points can cost.
+fn batch_points(chunk: Option<u32>) -> usize {
+    const TARGET: usize = 1 << 18;
+    let Some(chunk) = chunk.map(|c| c as usize).filter(|&c| c > 0) else {
+        return TARGET;
+    };
+    let threads = rayon::current_num_threads().max(1);
+    let chunks = TARGET.div_ceil(chunk);
+    if chunk.saturating_mul(threads) > 4 * TARGET {
+        // Chunks so large that one per thread would cost more than the bound.
+        return chunk * chunks;
+    }
+    chunk * chunks.next_multiple_of(threads)
+}
+
 /// The layout of a LAS input, kept so that LAS output from it looks like it: see
 /// [`WriteOptions::las`](crate::WriteOptions::las).
 #[derive(Clone, Debug, PartialEq)]
@@ -82,5 +101,26 @@ impl LasTemplate {
             vlrs: header.vlrs().iter().filter(carried).cloned().collect(),
             evlrs: header.evlrs().iter().filter(carried).cloned().collect(),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::batch_points;
+
+    /// A batch is a whole number of chunks per thread, near 2^18 points, and bounded for
+    /// huge chunks.
+    #[test]
+    fn batches_are_whole_chunks_per_thread() {
+        let threads = rayon::current_num_threads();
+        for chunk in [1, 1_000, 50_000, 100_000, 1 << 18] {
+            let batch = batch_points(Some(chunk));
+            let chunk = chunk as usize;
+            assert_eq!(batch % (chunk * threads), 0, "chunk {chunk}");
+            assert!(batch >= 1 << 18 && batch < (1 << 18) + 2 * chunk * threads);
+        }
+        assert_eq!(batch_points(Some(10_000_000)), 10_000_000);
+        assert_eq!(batch_points(None), 1 << 18);
+        assert_eq!(batch_points(Some(0)), 1 << 18);
     }
 }

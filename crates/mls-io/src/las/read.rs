@@ -5,18 +5,14 @@ use std::collections::HashSet;
 use std::io::{self, Cursor, Read, Seek};
 
 use las::Reader;
+use rayon::prelude::*;
 
 use super::dims::{self, Field};
 use super::extra::{self, ExtraField};
 use super::{LasTemplate, extra::Descriptor};
-use crate::attributes::{Attribute, AttributeData, usable_name};
+use crate::attributes::{Attribute, AttributeData, Scalar, usable_name};
 use crate::error::{ReadError, quoted};
 use crate::{MAX_PREALLOCATED, PointCloud, ReadOutcome};
-
-/// Points read per call to the `las` reader: bounded, so a header that claims too many points
-/// costs no memory until they arrive, and several LAZ chunks (50,000 points each, usually)
-/// long, so that the codec decompresses them on several threads.
-const CHUNK_POINTS: u64 = 1 << 18;
 
 /// Where each attribute comes from in a record.
 #[derive(Debug)]
@@ -45,6 +41,7 @@ pub struct LasReader {
     template: LasTemplate,
     notes: Vec<String>,
     bounds: ([f64; 3], [f64; 3]),
+    batch: u64,
 }
 
 impl std::fmt::Debug for LasReader {
@@ -148,6 +145,11 @@ impl LasReader {
         let template = LasTemplate::from_header(header, number, descriptors);
         let b = header.bounds();
         let bounds = ([b.min.x, b.min.y, b.min.z], [b.max.x, b.max.y, b.max.z]);
+        let chunk = header
+            .laz_vlr()
+            .ok()
+            .filter(|v| !v.uses_variable_size_chunks())
+            .map(|v| v.chunk_size());
         Ok(Self {
             reader,
             name: name.to_owned(),
@@ -161,6 +163,7 @@ impl LasReader {
             template,
             notes,
             bounds,
+            batch: super::batch_points(chunk) as u64,
         })
     }
 
@@ -178,6 +181,12 @@ impl LasReader {
     /// caller that needs it exact measures the points.
     pub fn header_bounds(&self) -> ([f64; 3], [f64; 3]) {
         self.bounds
+    }
+
+    /// Points per [`Self::read_into`] call that keeps every thread of the LAZ codec busy, a
+    /// few hundred thousand.
+    pub fn batch_len(&self) -> u64 {
+        self.batch
     }
 
     /// Bytes of one point record, extra bytes included.
@@ -251,44 +260,63 @@ impl LasReader {
                 "truncated: the header says {expected} points but only {done} could be read"
             )));
         }
-        for (index, ((x, y), z)) in data.x().zip(data.y()).zip(data.z()).enumerate() {
-            if !(x.is_finite() && y.is_finite() && z.is_finite()) {
-                return Err(error(format!(
-                    "point {}: coordinate ({x}, {y}, {z}) is not finite (check the header's \
-                     scale and offset)",
-                    done + index as u64
-                )));
-            }
-            cloud.points.push([x, y, z]);
-        }
+        // Column by column, each on its own thread: the codec's threads are idle meanwhile.
+        let raw = data.raw_bytes();
         let record = data.record_len();
         let base = self.base;
-        for raw in data.raw_bytes().chunks_exact(record) {
+        let points = || {
+            for (index, ((x, y), z)) in data.x().zip(data.y()).zip(data.z()).enumerate() {
+                if !(x.is_finite() && y.is_finite() && z.is_finite()) {
+                    return Err(error(format!(
+                        "point {}: coordinate ({x}, {y}, {z}) is not finite (check the header's \
+                         scale and offset)",
+                        done + index as u64
+                    )));
+                }
+                cloud.points.push([x, y, z]);
+            }
+            Ok(())
+        };
+        let normals = || {
             if let (Some(offsets), Some(normals)) = (self.normal_offsets, cloud.normals.as_mut()) {
-                normals.push(offsets.map(|o| {
-                    let at = base + o;
-                    raw.get(at..at + 8)
-                        .and_then(|b| b.try_into().ok())
-                        .map_or(f64::NAN, f64::from_le_bytes)
+                normals.extend(raw.chunks_exact(record).map(|raw| {
+                    offsets.map(|o| {
+                        let at = base + o;
+                        raw.get(at..at + 8)
+                            .and_then(|b| b.try_into().ok())
+                            .map_or(f64::NAN, f64::from_le_bytes)
+                    })
                 }));
             }
-            for (source, attribute) in self.sources.iter().zip(&mut cloud.attributes) {
-                // Both arms are within the record: the layout is the las crate's, and the
-                // extra bytes were checked against it when the header was read.
-                match source {
-                    Source::Standard(f) => {
-                        if let Some(value) = dims::decode(raw, f) {
-                            attribute.data.push(value);
+        };
+        let attributes = || {
+            self.sources
+                .par_iter()
+                .zip(cloud.attributes.par_iter_mut())
+                .for_each(|(source, attribute)| {
+                    // Within the record: the layout is the las crate's, and the extra bytes
+                    // were checked against it when the header was read.
+                    let data = &mut attribute.data;
+                    match (source, data) {
+                        (Source::Standard(f), AttributeData::U8(v)) if f.bits.is_some() => {
+                            v.extend(raw.chunks_exact(record).filter_map(|r| {
+                                match dims::decode(r, f) {
+                                    Some(Scalar::U8(b)) => Some(b),
+                                    _ => None,
+                                }
+                            }));
+                        }
+                        (Source::Standard(f), data) => {
+                            data.extend_le(raw, record, f.at);
+                        }
+                        (Source::Extra(at), data) => {
+                            data.extend_le(raw, record, *at);
                         }
                     }
-                    Source::Extra(at) => {
-                        attribute
-                            .data
-                            .push_bytes(raw.get(*at..).unwrap_or_default(), false);
-                    }
-                }
-            }
-        }
+                });
+        };
+        let (points, ((), ())) = rayon::join(points, || rayon::join(normals, attributes));
+        points?;
         self.done += data.len() as u64;
         Ok(data.len())
     }
@@ -302,7 +330,8 @@ where
     let mut reader = LasReader::new(read, name)?;
     let capacity = usize::try_from(reader.len().min(MAX_PREALLOCATED)).unwrap_or(0);
     let mut cloud = reader.empty_cloud(capacity);
-    while reader.read_into(&mut cloud, CHUNK_POINTS)? > 0 {}
+    let batch = reader.batch_len();
+    while reader.read_into(&mut cloud, batch)? > 0 {}
     cloud.las = Some(reader.template.clone());
     Ok(ReadOutcome {
         cloud,

@@ -5,18 +5,20 @@ use std::fs::File;
 use std::io::{self, BufWriter, Cursor, Seek, Write};
 
 use las::point::Format;
+use rayon::prelude::*;
+
 use las::{Builder, PointDataBuilder, Transform, Vector, Version, Vlr, Writer};
 
 use super::LasTemplate;
 use super::dims::{self, Field};
 use super::extra::{self, Descriptor, MAX_NAME_BYTES};
-use crate::attributes::{AttributeData, Scalar};
+use crate::attributes::{AttributeData, Le, Scalar, scatter_le};
 use crate::error::WriteError;
 use crate::write::{Column, ColumnData, validate};
 
-/// Points encoded per call to the `las` writer: several LAZ chunks, which the codec then
-/// compresses on several threads.
-const CHUNK_POINTS: usize = 1 << 18;
+/// Records encoded per task: big enough to amortise a task, small enough to share a batch
+/// evenly between threads.
+const RECORDS_PER_TASK: usize = 4096;
 
 /// The plan of a LAS file for a table: the coordinate columns, the columns that go into
 /// standard fields, the extra-bytes columns and the header.
@@ -238,6 +240,28 @@ fn column_value(data: &ColumnData<'_>, row: usize) -> Option<Scalar> {
     })
 }
 
+/// Writes rows `first..` of a column, little-endian in its type, at byte `at` of the
+/// successive `record`-byte records of `block`.
+fn scatter(data: &ColumnData<'_>, first: usize, block: &mut [u8], record: usize, at: usize) {
+    match *data {
+        ColumnData::F64(values) => {
+            scatter_le(values.get(first..).unwrap_or_default(), block, record, at)
+        }
+        ColumnData::I32(values) => {
+            scatter_le(values.get(first..).unwrap_or_default(), block, record, at)
+        }
+        ColumnData::Component { vectors, axis } => {
+            if at + f64::N <= record {
+                let vectors = vectors.get(first..).unwrap_or_default();
+                for (r, v) in block.chunks_exact_mut(record).zip(vectors) {
+                    axis.of(v).write(&mut r[at..]);
+                }
+            }
+        }
+        ColumnData::Attribute(values) => values.scatter_le(first, block, record, at),
+    }
+}
+
 fn las_error(file: &str, error: &las::Error) -> WriteError {
     match error {
         las::Error::Io(io) => WriteError::Io {
@@ -292,12 +316,27 @@ where
     let record_len = usize::from(format.len());
     let base = record_len - usize::from(format.extra_bytes);
     let transforms = [plan.transforms.x, plan.transforms.y, plan.transforms.z];
-    let mut start = 0;
-    let mut value = Vec::with_capacity(8);
-    while start < rows {
-        let end = rows.min(start + CHUNK_POINTS);
-        let mut bytes = vec![0u8; (end - start) * record_len];
-        for (row, record) in (start..end).zip(bytes.chunks_exact_mut(record_len)) {
+    let chunk = writer
+        .header()
+        .laz_vlr()
+        .ok()
+        .filter(|v| !v.uses_variable_size_chunks())
+        .map(|v| v.chunk_size());
+    let batch = super::batch_points(chunk);
+    // The extra-bytes columns and their sizes, in record order.
+    let extra: Vec<(&ColumnData<'_>, usize)> = plan
+        .extra
+        .iter()
+        .map(|&i| {
+            (
+                &columns[i].data,
+                extra::column_type(&columns[i].data).size(),
+            )
+        })
+        .collect();
+    // Rows `first..` into the records of `block`, column by column.
+    let encode = |first: usize, block: &mut [u8]| -> las::Result<()> {
+        for (row, record) in (first..).zip(block.chunks_exact_mut(record_len)) {
             for ((&column, transform), at) in plan.xyz.iter().zip(&transforms).zip([0, 4, 8]) {
                 // The nearest step of the header's grid.
                 let stored = transform.inverse(f64_at(&columns[column].data, row))?;
@@ -309,23 +348,39 @@ where
                     dims::encode(record, f, Scalar::U8(1));
                 }
             }
-            for &(ref f, column) in &plan.standard {
-                if let Some(v) = column_value(&columns[column].data, row) {
-                    dims::encode(record, f, v);
+        }
+        for &(ref f, column) in &plan.standard {
+            let data = &columns[column].data;
+            if f.bits.is_some() {
+                for (row, record) in (first..).zip(block.chunks_exact_mut(record_len)) {
+                    if let Some(v) = column_value(data, row) {
+                        dims::encode(record, f, v);
+                    }
                 }
-            }
-            let mut at = base;
-            for column in plan.extra.iter().map(|&i| &columns[i]) {
-                value.clear();
-                let ty = extra::column_type(&column.data);
-                if let Some(v) = column_value(&column.data, row) {
-                    v.push_le(&mut value);
-                }
-                value.resize(ty.size(), 0);
-                record[at..at + ty.size()].copy_from_slice(&value);
-                at += ty.size();
+            } else {
+                // The plan put here only columns of the field's type.
+                scatter(data, first, block, record_len, f.at);
             }
         }
+        let mut at = base;
+        for &(data, size) in &extra {
+            scatter(data, first, block, record_len, at);
+            at += size;
+        }
+        Ok(())
+    };
+    let mut start = 0;
+    while start < rows {
+        let end = rows.min(start + batch);
+        let mut bytes = vec![0u8; (end - start) * record_len];
+        // Encoded on every thread: the codec's threads would otherwise wait for this one. The
+        // first error in row order is the one reported, whatever the threads.
+        let encoded: Vec<las::Result<()>> = bytes
+            .par_chunks_mut(RECORDS_PER_TASK * record_len)
+            .enumerate()
+            .map(|(task, block)| encode(start + task * RECORDS_PER_TASK, block))
+            .collect();
+        encoded.into_iter().collect::<las::Result<()>>()?;
         let data = PointDataBuilder::new()
             .for_header(writer.header())
             .build_from_bytes(bytes)?;
