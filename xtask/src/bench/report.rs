@@ -314,7 +314,7 @@ pub(super) fn render(
             w,
             "**The count may be stale**: the `field.rs` measured here is not the one counted \
              (FNV-1a {hash:#018x}, counted {FLOPS_COUNTED_HASH:#018x}); recount \
-             `FLOPS_PER_NEIGHBOUR` in `xtask/src/bench.rs`.\n"
+             `FLOPS_PER_NEIGHBOUR` in `xtask/src/bench/mod.rs`.\n"
         );
     }
     let _ = writeln!(
