@@ -44,58 +44,62 @@ pub(crate) struct Options {
     tiles: (u32, u32),
 }
 
-impl Options {
-    /// Parses the arguments; a relative output is taken relative to `invoked_from`, the
-    /// directory `cargo xtask` was run from (the xtask itself runs at the project root).
-    pub(crate) fn parse(args: &[String], invoked_from: &Path) -> Result<Self> {
-        let mut points = None;
-        let mut output = None;
-        let mut seed = SceneConfig::default().seed;
-        let mut noise = SceneConfig::default().range_noise;
-        let mut normals = false;
-        let mut tiles = (1, 1);
-        let mut it = args.iter();
-        while let Some(a) = it.next() {
-            let mut value = || {
-                it.next()
-                    .with_context(|| format!("gen-cloud: {a} needs a value"))
-            };
-            match a.as_str() {
-                "--points" => {
-                    let v = value()?;
-                    points = Some(
-                        v.replace('_', "")
-                            .parse()
-                            .with_context(|| format!("gen-cloud: --points {v}"))?,
-                    );
-                }
-                "-o" | "--output" => output = Some(invoked_from.join(value()?)),
-                "--seed" => {
-                    let v = value()?;
-                    seed = v
-                        .parse()
-                        .with_context(|| format!("gen-cloud: --seed {v}"))?;
-                }
-                "--noise" => {
-                    let v = value()?;
-                    noise = v
-                        .parse()
-                        .with_context(|| format!("gen-cloud: --noise {v}"))?;
-                }
-                "--normals" => normals = true,
-                "--tiles" => tiles = parse_tiles(value()?)?,
-                other => bail!("gen-cloud: unknown option `{other}`"),
-            }
+/// The arguments of `cargo xtask gen-cloud`.
+#[derive(Clone, Debug, clap::Parser)]
+#[command(name = "gen-cloud")]
+pub(crate) struct Args {
+    /// Number of points (underscores allowed: 100_000_000).
+    #[arg(long, value_parser = parse_count)]
+    points: u64,
+    /// Output file, .las or .laz, relative to the directory the task was run from.
+    #[arg(short = 'o', long, value_name = "OUT.las|OUT.laz")]
+    output: PathBuf,
+    /// Seed of the scene.
+    #[arg(long, default_value_t = SceneConfig::default().seed)]
+    seed: u64,
+    /// Standard deviation of the range noise, metres.
+    #[arg(long, value_name = "SIGMA", default_value_t = SceneConfig::default().range_noise)]
+    noise: f64,
+    /// Add the true normals as f64 extra bytes nx ny nz.
+    #[arg(long)]
+    normals: bool,
+    /// Rows (along y) by columns (along x) of tiles, written as OUT_r{i}_c{j}.laz.
+    #[arg(long, value_name = "RxC", value_parser = parse_tiles, default_value = "1x1")]
+    tiles: (u32, u32),
+}
+
+impl Args {
+    /// The options, with a relative output taken relative to `invoked_from`, the directory
+    /// `cargo xtask` was run from (the xtask itself runs at the project root).
+    pub(crate) fn options(self, invoked_from: &Path) -> Options {
+        Options {
+            points: self.points,
+            output: invoked_from.join(self.output),
+            seed: self.seed,
+            noise: self.noise,
+            normals: self.normals,
+            tiles: self.tiles,
         }
-        Ok(Self {
-            points: points.context("gen-cloud: --points N is required")?,
-            output: output.context("gen-cloud: -o OUT.las|OUT.laz is required")?,
-            seed,
-            noise,
-            normals,
-            tiles,
-        })
     }
+}
+
+impl Options {
+    /// Parses `gen-cloud`'s arguments (without the task's name).
+    pub(crate) fn parse(args: &[String], invoked_from: &Path) -> Result<Self> {
+        use clap::Parser as _;
+        let args = Args::try_parse_from(
+            std::iter::once("gen-cloud").chain(args.iter().map(String::as_str)),
+        )
+        .map_err(|e| anyhow::anyhow!("{}", e.to_string().trim_end()))?;
+        Ok(args.options(invoked_from))
+    }
+}
+
+/// A point count, with `_` separators allowed.
+fn parse_count(text: &str) -> Result<u64> {
+    text.replace('_', "")
+        .parse()
+        .with_context(|| format!("gen-cloud: --points {text}"))
 }
 
 /// `RxC`, both at least 1.

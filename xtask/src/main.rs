@@ -20,72 +20,103 @@ mod validate_jet;
 mod validate_shapes;
 mod validate_sweep;
 
-const TASKS: &str = "\
-Tasks:
-  validate [--quick] [--seed N] [--evals N] [--replay SEED] [--differential-only]
-                 Production entry points against the witnesses of mls-ad on seeded random
-                 clouds, analytic shapes, then the robustness sweep.
-                 Writes target/validate/report.md. --quick: a small run for CI.
-  faults [NAME-PREFIX...]
-                 Applies each fault (a misreading of the paper, or a 1e-9 perturbation of one
-                 term) to a copy of the workspace and checks that `validate --quick
-                 --differential-only` reports it; only the named ones if prefixes are given.
-                 Writes target/validate/faults.md.
-  robustness [--quick] [--clouds N] [--seed N] [--replay SEED] [--fuzz SECONDS]
-                 mls-core on 10,000 adversarial clouds (--quick: 400); --fuzz also runs each
-                 cargo-fuzz reader target for SECONDS. Writes target/robustness/report.md.
-  bench [--quick] Throughput, memory and scaling against issue 5's targets; writes
-                 docs/benchmarks.md. --quick: small clouds, writes target/bench/quick.md.
-  bench-tiled [--quick] [--points N] [--memory SIZE] [--io-only]
-                 Clouds larger than memory: gen-cloud clouds of N/10 and N points
-                 (default 10^8) tiled in SIZE (default 2GiB) against in-memory runs, the jet
-                 tiled, LAZ read + write; writes the out-of-core section of docs/benchmarks.md.
-                 --io-only: the LAZ read + write timing alone, replacing its line there.
-  defaults       The measurements behind mlscurv's defaults (--h-factor, --at); writes docs/defaults.md.
-  paper [--quick] [--check]
-                 The paper's Tables 1-2, Figure 8, h and cutoff studies, adaptive h and figures;
-                 writes docs/paper.md and docs/figures/. --check: fails if docs/paper.md is stale.
-                 --quick: reduced densities into target/paper/.
-  accuracy [--seeds N]
-                 Every estimator on random, jittered, grid, scanline and noisy clouds against
-                 the analytic truth; writes docs/accuracy.md.
-  accuracy-explore [CLOUD]
-                 The same clouds with several jet settings, printed (for studies); with
-                 JET_DIAG=1 also the make-up of the predicted error by decile.
-  gen-cloud --points N -o OUT.las|OUT.laz [--seed S] [--noise SIGMA] [--normals] [--tiles RxC]
-                 A seeded airborne-LiDAR test cloud (terrain, buildings, trees, scan strips) of
-                 exactly N points, streamed as LAS 1.4 point format 6 or LAZ; --normals adds the
-                 true normals as f64 extra bytes nx ny nz; --tiles writes OUT_r{i}_c{j}.laz.
-                 A relative OUT is taken from the directory the task was run from.
-  ci             fmt --check, clippy -D warnings, tests, validate --quick.";
+/// Project tasks of mls-curvature: validation, benchmarks, studies and test clouds.
+#[derive(Debug, clap::Parser)]
+#[command(
+    name = "cargo xtask",
+    bin_name = "cargo xtask",
+    arg_required_else_help = true
+)]
+struct Cli {
+    #[command(subcommand)]
+    task: Task,
+}
 
-fn main() -> Result<()> {
-    let args: Vec<String> = std::env::args().skip(1).collect();
+#[derive(Debug, clap::Subcommand)]
+enum Task {
+    /// Production entry points against the witnesses of mls-ad on seeded random clouds,
+    /// analytic shapes, then the robustness sweep; writes target/validate/report.md.
+    Validate(validate::Options),
+    /// Applies each fault (a misreading of the paper, or a 1e-9 perturbation of one term) to a
+    /// copy of the workspace and checks that `validate --quick --differential-only` reports
+    /// it; writes target/validate/faults.md.
+    Faults {
+        /// Only the faults whose names start with one of these.
+        #[arg(value_name = "NAME-PREFIX")]
+        only: Vec<String>,
+    },
+    /// mls-core on 10,000 adversarial clouds; writes target/robustness/report.md.
+    Robustness(robustness::Options),
+    /// Throughput, memory and scaling against issue 5's targets; writes docs/benchmarks.md.
+    Bench {
+        /// Small clouds, into target/bench/quick.md.
+        #[arg(long)]
+        quick: bool,
+    },
+    /// Clouds larger than memory: gen-cloud clouds of N/10 and N points tiled against
+    /// in-memory runs, the jet tiled, LAZ read + write; writes the out-of-core section of
+    /// docs/benchmarks.md.
+    BenchTiled(bench_tiled::Options),
+    /// The measurements behind mlscurv's defaults (--h-factor, --at); writes docs/defaults.md.
+    Defaults,
+    /// The paper's Tables 1-2, Figure 8, h and cutoff studies, adaptive h and figures; writes
+    /// docs/paper.md and docs/figures/.
+    Paper(paper::Options),
+    /// Every estimator on random, jittered, grid, scanline and noisy clouds against the
+    /// analytic truth; writes docs/accuracy.md.
+    Accuracy {
+        /// Random seeds per cloud.
+        #[arg(long, default_value_t = 2)]
+        seeds: u64,
+    },
+    /// The same clouds with several jet settings, printed (for studies); with JET_DIAG=1 also
+    /// the make-up of the predicted error by decile.
+    AccuracyExplore {
+        /// Only the clouds whose name contains this.
+        cloud: Option<String>,
+    },
+    /// A seeded airborne-LiDAR test cloud (terrain, buildings, trees, scan strips) of exactly
+    /// N points, streamed as LAS 1.4 point format 6 or LAZ.
+    GenCloud(gen_cloud::Args),
+    /// What CI runs (.ci/run calls it): fmt --check, clippy -D warnings, the tests, validate
+    /// --quick, paper --quick and the Python package's tests.
+    Ci,
+}
+
+/// A seed or count, decimal or `0x` hexadecimal.
+pub(crate) fn parse_u64(text: &str) -> Result<u64> {
+    Ok(match text.strip_prefix("0x") {
+        Some(hex) => u64::from_str_radix(hex, 16)?,
+        None => text.parse()?,
+    })
+}
+
+fn main() {
+    use clap::Parser as _;
+    let cli = Cli::parse();
+    if let Err(e) = run(cli.task) {
+        // One line per cause, no backtrace.
+        eprintln!("xtask: error: {e:#}");
+        std::process::exit(1);
+    }
+}
+
+fn run(task: Task) -> Result<()> {
     // Outputs named on the command line are relative to where the task was run.
     let invoked_from = std::env::current_dir().context("cannot read the current directory")?;
     std::env::set_current_dir(project_root()).context("cannot change to the project root")?;
-    let Some(task) = args.first() else {
-        println!("{TASKS}");
-        return Ok(());
-    };
-    if matches!(task.as_str(), "--help" | "-h" | "help") {
-        println!("{TASKS}");
-        return Ok(());
-    }
-    let rest = &args[1..];
-    match task.as_str() {
-        "validate" => validate::run(&validate::Options::parse(rest)?),
-        "accuracy" => accuracy::run(rest),
-        "accuracy-explore" => accuracy::explore(rest),
-        "faults" => faults::run(rest),
-        "robustness" => robustness::run(&robustness::Options::parse(rest)?),
-        "bench" => bench::run(rest),
-        "bench-tiled" => bench_tiled::run(rest),
-        "defaults" => defaults::run(),
-        "paper" => paper::run(&paper::Options::parse(rest)?),
-        "gen-cloud" => gen_cloud::run(&gen_cloud::Options::parse(rest, &invoked_from)?),
-        "ci" => ci(),
-        other => bail!("unknown task `{other}`\n{TASKS}"),
+    match task {
+        Task::Validate(o) => validate::run(&o),
+        Task::Faults { only } => faults::run(&only),
+        Task::Robustness(o) => robustness::run(&o),
+        Task::Bench { quick } => bench::run(quick),
+        Task::BenchTiled(o) => bench_tiled::run(&o),
+        Task::Defaults => defaults::run(),
+        Task::Paper(o) => paper::run(&o),
+        Task::Accuracy { seeds } => accuracy::run(seeds),
+        Task::AccuracyExplore { cloud } => accuracy::explore(cloud.as_ref()),
+        Task::GenCloud(args) => gen_cloud::run(&args.options(&invoked_from)),
+        Task::Ci => ci(),
     }
 }
 
@@ -112,19 +143,29 @@ pub(crate) fn run_checked(cmd: &mut Command) -> Result<()> {
     Ok(())
 }
 
+/// The one CI definition, which `.ci/run` calls after its installs: format, lints, the
+/// README's test command, the quick validation, the paper task at reduced density and the
+/// Python package's suite.
 fn ci() -> Result<()> {
     run_checked(cargo().args(["fmt", "--all", "--", "--check"]))?;
     run_checked(cargo().args([
         "clippy",
         "--workspace",
         "--all-targets",
+        "--locked",
         "--",
         "-D",
         "warnings",
     ]))?;
-    run_checked(cargo().args(["test", "--workspace"]))?;
+    // The README's test command.
+    run_checked(cargo().args(["test", "--workspace", "--locked"]))?;
+    // Closed form against hyper-dual AD, and the analytic shapes.
     validate::run(&validate::Options {
         quick: true,
         ..validate::Options::default()
-    })
+    })?;
+    // The paper task end to end (tables and figures into target/paper/).
+    paper::run(&paper::Options::quick())?;
+    // The Python package: pip install with maturin, and its pytest suite.
+    run_checked(&mut Command::new(".ci/python"))
 }

@@ -50,14 +50,23 @@ pub(crate) const OFFSET_TOLERANCE: [f64; 2] = [1e-5, 1e-5];
 /// differed by 1.5e-5.)
 pub(crate) const SIMILAR_TOLERANCE: [f64; 2] = [1e-10, 1e-7];
 
-#[derive(Clone, Debug)]
+/// Options of `cargo xtask robustness`.
+#[derive(Clone, Debug, clap::Args)]
 pub(crate) struct Options {
+    /// 400 clouds instead of 10,000.
+    #[arg(long)]
     pub quick: bool,
+    /// Number of clouds.
+    #[arg(long)]
     pub clouds: Option<usize>,
+    /// Base seed (decimal or 0x hexadecimal).
+    #[arg(long, default_value_t = DEFAULT_SEED, value_parser = crate::parse_u64)]
     pub seed: u64,
     /// Run only the cloud of this seed, and print it.
+    #[arg(long, value_parser = crate::parse_u64)]
     pub replay: Option<u64>,
-    /// Run each cargo-fuzz target for this many seconds after the clouds.
+    /// Run each cargo-fuzz reader target for this many seconds after the clouds.
+    #[arg(long = "fuzz", value_name = "SECONDS")]
     pub fuzz_seconds: Option<u64>,
 }
 
@@ -74,31 +83,6 @@ impl Default for Options {
 }
 
 impl Options {
-    pub fn parse(args: &[String]) -> Result<Self> {
-        let mut o = Self::default();
-        let mut it = args.iter();
-        while let Some(a) = it.next() {
-            let mut value = || -> Result<u64> {
-                let Some(v) = it.next() else {
-                    bail!("robustness: {a} needs a value")
-                };
-                Ok(match v.strip_prefix("0x") {
-                    Some(hex) => u64::from_str_radix(hex, 16)?,
-                    None => v.parse()?,
-                })
-            };
-            match a.as_str() {
-                "--quick" => o.quick = true,
-                "--clouds" => o.clouds = Some(value()? as usize),
-                "--seed" => o.seed = value()?,
-                "--replay" => o.replay = Some(value()?),
-                "--fuzz" => o.fuzz_seconds = Some(value()?),
-                other => bail!("robustness: unknown option `{other}`"),
-            }
-        }
-        Ok(o)
-    }
-
     fn cloud_count(&self) -> usize {
         self.clouds.unwrap_or(if self.quick {
             QUICK_CLOUDS

@@ -20,13 +20,23 @@ pub(crate) const SD_THRESHOLD: f64 = 1e-5;
 /// Default base seed; every case derives its own seed from it and prints it when it is worst.
 const DEFAULT_SEED: u64 = 0x4d4c_5321;
 
-#[derive(Clone, Debug)]
+/// Options of `cargo xtask validate`.
+#[derive(Clone, Debug, clap::Args)]
 pub(crate) struct Options {
+    /// A small run for CI (under 30 s).
+    #[arg(long)]
     pub quick: bool,
+    /// Base seed; every case derives its own from it (decimal or 0x hexadecimal).
+    #[arg(long, default_value_t = DEFAULT_SEED, value_parser = crate::parse_u64)]
     pub seed: u64,
+    /// Evaluations of the differential sweep (default: the run's own count).
+    #[arg(long)]
     pub evals: Option<usize>,
+    /// The differential sweep only: no analytic shapes, no robustness sweep.
+    #[arg(long)]
     pub differential_only: bool,
     /// Run only the case with this seed (as printed in the report).
+    #[arg(long, value_parser = crate::parse_u64)]
     pub replay: Option<u64>,
 }
 
@@ -40,35 +50,6 @@ impl Default for Options {
             replay: None,
         }
     }
-}
-
-impl Options {
-    pub fn parse(args: &[String]) -> Result<Self> {
-        let mut o = Self::default();
-        let mut it = args.iter();
-        while let Some(a) = it.next() {
-            match a.as_str() {
-                "--quick" => o.quick = true,
-                "--differential-only" => o.differential_only = true,
-                "--seed" => o.seed = parse_u64(it.next())?,
-                "--evals" => o.evals = Some(parse_u64(it.next())? as usize),
-                "--replay" => o.replay = Some(parse_u64(it.next())?),
-                other => bail!("validate: unknown option `{other}`"),
-            }
-        }
-        Ok(o)
-    }
-}
-
-fn parse_u64(v: Option<&String>) -> Result<u64> {
-    let Some(v) = v else {
-        bail!("validate: option needs a value")
-    };
-    Ok(if let Some(hex) = v.strip_prefix("0x") {
-        u64::from_str_radix(hex, 16)?
-    } else {
-        v.parse()?
-    })
 }
 
 /// The rows of the report: one per quantity compared with its witness.

@@ -16,7 +16,7 @@ mod report;
 use std::path::PathBuf;
 use std::time::Instant;
 
-use anyhow::{Context, Result, bail};
+use anyhow::{Context, Result};
 use mls_bench::{Cloud, default_h};
 use mls_core::Cutoff;
 
@@ -118,14 +118,7 @@ pub(super) const QUICK: Sizes = Sizes {
     reps_large: 1,
 };
 
-pub(crate) fn run(args: &[String]) -> Result<()> {
-    let mut quick = false;
-    for a in args {
-        match a.as_str() {
-            "--quick" => quick = true,
-            other => bail!("unknown option `{other}` for bench (usage: bench [--quick])"),
-        }
-    }
+pub(crate) fn run(quick: bool) -> Result<()> {
     let sizes = if quick { QUICK } else { FULL };
     let started = Instant::now();
     let load_before = load_average();
