@@ -98,7 +98,7 @@ const FAULTS: &[Fault] = &[
     Fault {
         name: "S2 cluster reach = radius",
         description: "a cluster's shared search reaches the support radius from its centre, not radius + spread (issue 12's audit)",
-        file: "crates/mls-core/src/surface.rs",
+        file: "crates/mls-core/src/surface/evaluator.rs",
         original: "let reach = (radius + spread) * (1.0 + 1e-9);",
         replacement: "let reach = radius * (1.0 + 1e-9);",
     },

@@ -1,0 +1,112 @@
+//! Shared steps: read and check the input, choose h, get oriented normals, build the surface.
+//!
+//! One file per stage: `input.rs` reads the cloud, `scale.rs` chooses and checks h,
+//! `oriented.rs` gets oriented normals, `build.rs` runs the three and builds the surface. Here
+//! the timing of the stages, the thread pool and the summaries of the results, which every
+//! command shares. Everything is re-exported, so callers name it `pipeline::…`.
+
+mod build;
+mod input;
+mod oriented;
+mod scale;
+
+use std::time::Instant;
+
+use anyhow::{Context, Result};
+use mls_core::PointStatus;
+
+pub use self::build::{
+    Built, Prepared, Surface, build_surface, eval_surface, fixed_surface, prepare, surface,
+    surface_in,
+};
+pub(crate) use self::input::is_stdio;
+pub use self::input::{
+    STDIN_NAME, STDOUT_NAME, check_count, format_name, input_name, read, read_any, read_outcome,
+    read_quietly, to_points,
+};
+pub use self::oriented::{Normals, normals, scan_viewpoints};
+pub use self::scale::{Scale, check_scale, choose_h, print_warning};
+pub use crate::output::{Carried, Output, check_output, write_stdout};
+
+/// The smallest cloud a neighbourhood can be built from: a covariance normal needs 3 points
+/// besides the centre, the MLS evaluation at least 3 samples.
+pub const MIN_POINTS: usize = 4;
+
+/// Wall-clock time of the named stages, for the summary, and whether to show a spinner on
+/// stderr while one runs ([`Timings::default`] shows none).
+#[derive(Debug, Default)]
+pub struct Timings(pub Vec<(&'static str, f64)>, bool);
+
+impl Timings {
+    /// Timings that show progress if `show` (stderr a terminal and no `--quiet`).
+    pub fn new(show: bool) -> Self {
+        Self(Vec::new(), show)
+    }
+
+    /// Whether progress is shown.
+    pub fn show(&self) -> bool {
+        self.1
+    }
+
+    /// Runs and times `stage` under a spinner.
+    pub fn time<T>(&mut self, stage: &'static str, f: impl FnOnce() -> T) -> T {
+        let _spinner = crate::progress::Spinner::new(stage, self.1);
+        self.measure(stage, f)
+    }
+
+    /// Runs and times `stage`, which draws its own progress.
+    pub fn measure<T>(&mut self, stage: &'static str, f: impl FnOnce() -> T) -> T {
+        let t = Instant::now();
+        let out = f();
+        self.0.push((stage, t.elapsed().as_secs_f64()));
+        out
+    }
+}
+
+/// Runs `f` on a rayon pool with the requested number of threads (all cores by default).
+pub fn with_threads<T: Send>(
+    threads: Option<u16>,
+    f: impl FnOnce() -> Result<T> + Send,
+) -> Result<T> {
+    match threads {
+        None => f(),
+        Some(n) => rayon::ThreadPoolBuilder::new()
+            .num_threads(usize::from(n))
+            .build()
+            .context("cannot start the worker threads")?
+            .install(f),
+    }
+}
+
+/// Counts of each status, in code order.
+pub fn status_counts(codes: &[i32]) -> String {
+    let ok = codes.iter().filter(|&&c| c == 0).count();
+    let mut parts = vec![format!("ok {ok}")];
+    for s in PointStatus::ALL {
+        let n = codes.iter().filter(|&&c| c == i32::from(s.code())).count();
+        if n > 0 {
+            parts.push(format!("{} {n}", s.name()));
+        }
+    }
+    parts.join(", ")
+}
+
+/// A few percentiles of the finite values.
+pub fn percentiles(values: &[f64]) -> String {
+    let mut v: Vec<f64> = values.iter().copied().filter(|v| v.is_finite()).collect();
+    if v.is_empty() {
+        return "no values".into();
+    }
+    v.sort_unstable_by(f64::total_cmp);
+    let q = |p: f64| v[((v.len() - 1) as f64 * p).round() as usize];
+    format!(
+        "p1 {:+.4e}  p5 {:+.4e}  p25 {:+.4e}  p50 {:+.4e}  p75 {:+.4e}  p95 {:+.4e}  p99 {:+.4e}",
+        q(0.01),
+        q(0.05),
+        q(0.25),
+        q(0.5),
+        q(0.75),
+        q(0.95),
+        q(0.99)
+    )
+}

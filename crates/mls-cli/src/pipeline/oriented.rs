@@ -1,0 +1,152 @@
+//! Oriented normals for the surface: the file's own, or estimated from the points and
+//! oriented by the chosen rule (or towards each E57 scan's scanner), with the sentence that
+//! says where they came from for the summary.
+
+use anyhow::{Context, Result, bail};
+use mls_core::normals::{
+    DEFAULT_NEIGHBOURS, NormalsConfig, Orientation, estimate_normals, orient_normals_towards,
+};
+use mls_core::{Parallelism, Point, Vector};
+use mls_io::PointCloud;
+
+use crate::NormalsMode;
+
+/// Oriented normals, one per point (`None` where none could be had), and their source.
+#[derive(Debug)]
+pub struct Normals {
+    pub normals: Vec<Option<Vector>>,
+    pub source: String,
+    /// Whether they are the file's (measured data) rather than estimated from the points.
+    pub from_file: bool,
+}
+
+/// The scanner position of each point of an E57 input whose scans all have a pose, for the
+/// default orientation ([`normals`]); `None` for other inputs.
+pub fn scan_viewpoints(cloud: &PointCloud) -> Option<Vec<Point>> {
+    let viewpoints = cloud.scans.as_ref()?.viewpoints()?;
+    Some(viewpoints.into_iter().map(Point::from).collect())
+}
+
+/// Normals from `file_normals` (the file's, consumed here so that they are not held beside
+/// the converted ones) or estimated from `points`, as `mode` says, and oriented as
+/// `orientation` says; without one (the default), towards `viewpoints` (one per point: each
+/// point's own scanner, [`scan_viewpoints`]) if given, else outward.
+#[allow(clippy::too_many_arguments)]
+pub fn normals(
+    file_normals: Option<Vec<[f64; 3]>>,
+    points: &[Point],
+    mode: NormalsMode,
+    orientation: Option<Orientation>,
+    viewpoints: Option<&[Point]>,
+    h: f64,
+    par: Parallelism,
+    file: &str,
+) -> Result<Normals> {
+    let from_file = match (mode, file_normals) {
+        (NormalsMode::File, None) => {
+            bail!("{file}: --normals file given but the file has no normals (nx, ny, nz)")
+        }
+        (NormalsMode::File | NormalsMode::Auto, Some(n)) => Some(n),
+        _ => None,
+    };
+    if let Some(file_normals) = from_file {
+        let normals: Vec<Option<Vector>> = file_normals
+            .into_iter()
+            .map(|n| {
+                mls_core::UnitNormal::new(Vector::from(n))
+                    .ok()
+                    .map(|u| u.into_inner())
+            })
+            .collect();
+        let bad = normals.iter().filter(|n| n.is_none()).count();
+        let source = if bad == 0 {
+            "from the file".to_string()
+        } else {
+            format!("from the file ({bad} zero normals left out of the surface)")
+        };
+        return Ok(Normals {
+            normals,
+            source,
+            from_file: true,
+        });
+    }
+    // Per-scan viewpoints: estimated unoriented, then oriented by the per-point vote.
+    let per_scan = match (orientation, viewpoints) {
+        (None, Some(v)) => Some(v),
+        _ => None,
+    };
+    let orientation = orientation.unwrap_or_default();
+    let config = NormalsConfig {
+        k: DEFAULT_NEIGHBOURS,
+        h: Some(h),
+        orientation: if per_scan.is_some() {
+            Orientation::None
+        } else {
+            orientation
+        },
+        ..NormalsConfig::default()
+    };
+    let mut est = estimate_normals(points, &config, par)
+        .with_context(|| format!("{file}: normal estimation"))?;
+    if let Some(viewpoints) = per_scan {
+        est.report =
+            orient_normals_towards(points, &est.graph, &mut est.estimates, viewpoints, par)
+                .with_context(|| format!("{file}: normal orientation"))?;
+    }
+    let orient = match orientation {
+        _ if per_scan.is_some() => "oriented towards each scan's scanner position (E57 pose) by \
+            minimum spanning tree and a vote per smooth patch"
+            .to_string(),
+        Orientation::Outward => "oriented outward by minimum spanning tree".to_string(),
+        Orientation::Viewpoint(v) => format!(
+            "oriented towards the viewpoint ({}, {}, {}) by minimum spanning tree and a vote per smooth patch",
+            v.x, v.y, v.z
+        ),
+        Orientation::Up => {
+            "oriented up (+z) by minimum spanning tree and a vote per smooth patch".to_string()
+        }
+        Orientation::None => "not oriented (--orient none)".to_string(),
+    };
+    let r = &est.report;
+    let mut checks = Vec::new();
+    if let Some(f) = r.facing {
+        let towards = match orientation {
+            _ if per_scan.is_some() => "face their scanner",
+            Orientation::Up => "point up",
+            _ => "face the viewpoint",
+        };
+        if let Some(share) = f.share() {
+            checks.push(format!("{:.2}% of normals {towards}", 100.0 * share));
+        }
+        if let Some(share) = f.decisive_share() {
+            checks.push(format!(
+                "{:.2}% of the {} within 60° of the line of sight",
+                100.0 * share,
+                f.decisive
+            ));
+        }
+    }
+    if let Some(c) = r.consistency {
+        checks.push(format!("{:.2}% of neighbour pairs agree", 100.0 * c));
+    }
+    let pieces = if r.patches > r.components {
+        format!("{} component(s) in {} patches", r.components, r.patches)
+    } else {
+        format!("{} component(s)", r.components)
+    };
+    let checks = if checks.is_empty() {
+        String::new()
+    } else {
+        format!(", {}", checks.join(", "))
+    };
+    let source = format!(
+        "estimated (weighted covariance, {} neighbours), {orient}: {pieces}{checks}; {} failed",
+        DEFAULT_NEIGHBOURS,
+        est.failed()
+    );
+    Ok(Normals {
+        normals: est.normals().into_iter().map(Result::ok).collect(),
+        source,
+        from_file: false,
+    })
+}

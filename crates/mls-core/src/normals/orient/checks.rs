@@ -1,0 +1,83 @@
+//! The checks of an orientation, run after it and reported: how many neighbour pairs agree
+//! in sign, and, for the voting rules, how many normals face their line of sight. Kept apart
+//! from the traversal because they judge its result and never change it.
+
+use super::{Facing, Rule, check_lengths, is_canonical};
+use crate::math::{Point, Vector};
+use crate::normals::{NeighbourGraph, NormalsError};
+use crate::surface::Parallelism;
+
+/// The fraction of graph edges whose normals agree in sign, `n_i · n_j > 0`.
+///
+/// Edges are those of the symmetrised graph, each pair counted once, and only between points
+/// whose normals are finite and non-zero (a zero normal marks a missing one). A consistently
+/// oriented smooth, well-sampled surface scores 1; random signs score about 0.5. Returns
+/// `Ok(None)` when no edge qualifies. The normals need not be unit length.
+pub fn orientation_consistency(
+    graph: &NeighbourGraph,
+    normals: &[Vector],
+    par: Parallelism,
+) -> Result<Option<f64>, NormalsError> {
+    check_lengths(graph.len(), normals.len(), "normals")?;
+    Ok(consistency_of(graph, par, |i| {
+        normals
+            .get(i)
+            .filter(|v| v.iter().all(|c| c.is_finite()) && v.norm_squared() > 0.0)
+            .copied()
+    }))
+}
+
+pub(super) fn consistency_of<F>(graph: &NeighbourGraph, par: Parallelism, normal: F) -> Option<f64>
+where
+    F: Fn(usize) -> Option<Vector> + Sync,
+{
+    let count = |i: usize| -> (usize, usize) {
+        let Some(ni) = normal(i) else {
+            return (0, 0);
+        };
+        graph
+            .neighbours(i)
+            .iter()
+            .map(|&j| j as usize)
+            .filter(|&j| j != i && is_canonical(graph, i, j))
+            .filter_map(&normal)
+            .fold((0, 0), |(all, agree), nj| {
+                (all + 1, agree + usize::from(ni.dot(&nj) > 0.0))
+            })
+    };
+    let add = |a: (usize, usize), b: (usize, usize)| (a.0 + b.0, a.1 + b.1);
+    let (all, agree) = par.sum(graph.len(), 1024, (0, 0), count, add);
+    (all > 0).then(|| agree as f64 / all as f64)
+}
+
+/// How many of the normals face their line of sight under `rule` (a voting rule).
+pub(super) fn facing_of<F>(points: &[Point], rule: Rule<'_>, par: Parallelism, normal: F) -> Facing
+where
+    F: Fn(usize) -> Option<Vector> + Sync,
+{
+    let count = |i: usize| -> [usize; 4] {
+        let (Some(n), Some(u)) = (
+            normal(i),
+            points.get(i).and_then(|p| rule.line_of_sight(i, p)),
+        ) else {
+            return [0; 4];
+        };
+        let c = n.dot(&u);
+        let decisive = c.abs() >= 0.5;
+        [
+            1,
+            usize::from(c > 0.0),
+            usize::from(decisive),
+            usize::from(decisive && c > 0.0),
+        ]
+    };
+    let add = |a: [usize; 4], b: [usize; 4]| [a[0] + b[0], a[1] + b[1], a[2] + b[2], a[3] + b[3]];
+    let [normals, facing, decisive, decisive_facing] =
+        par.sum(points.len(), 1024, [0; 4], count, add);
+    Facing {
+        normals,
+        facing,
+        decisive,
+        decisive_facing,
+    }
+}

@@ -1,0 +1,366 @@
+//! The per-thread [`Evaluator`] of an [`MlsSurface`]: the neighbour search around one query
+//! or one cluster of queries, and the evaluations built on it (g and its derivatives, the
+//! curvature at a point, the projection onto the surface, the polynomial jet). It holds the
+//! buffers they reuse, so that after warm-up no query allocates.
+
+use super::{MlsSurface, PointResult, SurfacePoint};
+use crate::curvature::curvature;
+use crate::field::{FieldScratch, Implicit, Sample, evaluate, evaluate_loaded};
+use crate::jet::{self, JetConfig, JetPoint};
+use crate::kernels::LineBlock;
+use crate::math::{Point, UnitNormal, Vector};
+use crate::projection::line_minimum;
+use crate::status::PointStatus;
+
+impl MlsSurface {
+    /// A per-thread evaluator holding reusable buffers.
+    pub fn evaluator(&self) -> Evaluator<'_> {
+        Evaluator {
+            surface: self,
+            support: Vec::new(),
+            candidates: Vec::new(),
+            hits: Vec::new(),
+            scratch: FieldScratch::default(),
+            line: Vec::new(),
+            ladder: Vec::new(),
+            jet_scratch: jet::JetScratch::default(),
+        }
+    }
+}
+
+/// Evaluates the surface at query points without allocating per query (after warm-up).
+#[derive(Debug)]
+pub struct Evaluator<'a> {
+    surface: &'a MlsSurface,
+    support: Vec<Sample>,
+    /// Samples near a cluster of queries, filtered per query into `support`.
+    candidates: Vec<Sample>,
+    /// Indices of `candidates`, sorted into storage order (at most `u32::MAX` samples).
+    hits: Vec<u32>,
+    scratch: FieldScratch,
+    line: Vec<LineBlock>,
+    /// The jet's fits up the ladder of scales at one query.
+    ladder: Vec<JetPoint>,
+    jet_scratch: jet::JetScratch,
+}
+
+impl Evaluator<'_> {
+    /// Curvature of a weighted polynomial jet at the world-space point `x`, with the scale
+    /// chosen per point from the ladder of [`JetConfig`] (see [`crate::jet`]).
+    pub fn jet_at(&mut self, x: &Point, config: &JetConfig) -> Result<JetPoint, PointStatus> {
+        if !x.iter().all(|c| c.is_finite()) {
+            return Err(PointStatus::InvalidQuery);
+        }
+        let local = x - self.surface.origin;
+        let h = self.surface.kernel.h();
+        let mut frame = None;
+        let mut best: Option<JetPoint> = None;
+        let mut fallback: Option<JetPoint> = None;
+        self.ladder.clear();
+        let mut agree_last = true;
+        // Full-degree fits with too few equations to trust their own noise estimate: candidates
+        // for the choice at the front of the ladder, outside its stopping rules.
+        let mut early = 0;
+        let mut failure = PointStatus::NoNeighbours;
+        let (mut lo, mut hi) = ([f64::NEG_INFINITY; 2], [f64::INFINITY; 2]);
+        let scales = config.scales.max(1);
+        let radius_of = |j: usize| config.radius * h * std::f64::consts::SQRT_2.powi(j as i32);
+        // The support is gathered for two scales at a time; the fit keeps its own radius.
+        let mut gathered = 0.0;
+        for j in 0..scales {
+            let radius = radius_of(j);
+            if radius > gathered {
+                gathered = radius_of((j + 1).min(scales - 1));
+                // In storage order, so that the fit's sums do not depend on the tree's shape
+                // (a tile's tree differs from the whole cloud's; see [`Frame`]).
+                self.support.clear();
+                self.surface.samples_within_ordered(
+                    &local,
+                    gathered,
+                    &mut self.hits,
+                    &mut self.support,
+                );
+            }
+            let r2 = radius * radius;
+            let inside = self
+                .support
+                .iter()
+                .filter(|s| (s.point - local).norm_squared() <= r2)
+                .count();
+            if inside < 6 {
+                failure = if inside == 0 {
+                    PointStatus::NoNeighbours
+                } else {
+                    PointStatus::TooFewNeighbours
+                };
+                continue;
+            }
+            let frame = *frame.get_or_insert_with(|| {
+                // The frame normal: the input normals averaged with the jet's weights.
+                let inv_r2 = 1.0 / (radius * radius);
+                let sum: Vector = self
+                    .support
+                    .iter()
+                    .map(|s| {
+                        let t = (1.0 - (s.point - local).norm_squared() * inv_r2).max(0.0);
+                        s.normal * (t * t * t)
+                    })
+                    .sum();
+                UnitNormal::new(sum)
+                    .ok()
+                    .map(|n| jet::frame(&n.into_inner()))
+            });
+            let Some(frame) = frame else {
+                return Err(PointStatus::NormalUndefined);
+            };
+            let Some(fit) = jet::fit(
+                &self.support,
+                &local,
+                &frame,
+                radius,
+                config.degree,
+                config.normals,
+                &mut self.jet_scratch,
+            ) else {
+                if best.is_some() {
+                    break;
+                }
+                failure = PointStatus::TooFewNeighbours;
+                continue;
+            };
+            let Ok(p) = jet::jet_curvature(x, &frame, &fit) else {
+                failure = PointStatus::GradientVanishes;
+                break;
+            };
+            // Fits of a lower degree have a bias of another order: the ladder proper starts at
+            // the first scale that determines the full degree, and a lower-degree fit is kept
+            // only for a point where no scale does (sparse or boundary neighbourhoods).
+            if best.is_none() && fit.degree < config.degree.clamp(2, 4) {
+                fallback = fallback.or(Some(p));
+                continue;
+            }
+            if best.is_none() && !jet::trusted(&fit) {
+                self.ladder.push(p);
+                early += 1;
+                continue;
+            }
+            let k = [p.curvature.k1, p.curvature.k2];
+            let mut agree = true;
+            for i in 0..2 {
+                lo[i] = lo[i].max(k[i] - config.confidence * p.sd[i]);
+                hi[i] = hi[i].min(k[i] + config.confidence * p.sd[i]);
+                agree &= lo[i] <= hi[i];
+            }
+            self.ladder.push(p);
+            agree_last = agree;
+            if !agree {
+                break;
+            }
+            best = Some(p);
+            if jet::past_optimum(&self.ladder[early..]) {
+                break;
+            }
+        }
+        if best.is_some() {
+            let accepted = self.ladder.len() - usize::from(!agree_last);
+            best = Some(jet::choose_scale(&self.ladder, accepted));
+        } else if early > 0 {
+            best = Some(jet::choose_scale(&self.ladder, early));
+        }
+        best.or(fallback).ok_or(failure)
+    }
+
+    /// Collects into the internal buffer the samples within `radius` of `x` (all samples when
+    /// `radius` is `None`); `x` is in the surface's internal frame.
+    fn gather(&mut self, x: &Point, radius: Option<f64>) {
+        self.support.clear();
+        let s = self.surface;
+        match radius {
+            Some(r) => s.samples_within(x, r, &mut self.support),
+            None => self.support.extend_from_slice(&s.samples),
+        }
+    }
+
+    /// The samples within the kernel support of the world-space point `x`, in world space. For
+    /// independent re-computation (the AD witness) of what this evaluator computes.
+    pub fn support_of(&mut self, x: &Point) -> Vec<Sample> {
+        let local = x - self.surface.origin;
+        self.gather(&local, self.surface.kernel.support_radius());
+        self.support
+            .iter()
+            .map(|s| Sample {
+                point: s.point + self.surface.origin,
+                normal: s.normal,
+            })
+            .collect()
+    }
+
+    /// g, ∇g and H at the world-space point `x`.
+    pub fn implicit_at(&mut self, x: &Point) -> Result<Implicit, PointStatus> {
+        if !x.iter().all(|c| c.is_finite()) {
+            return Err(PointStatus::InvalidQuery);
+        }
+        let local = x - self.surface.origin;
+        self.gather(&local, self.surface.kernel.support_radius());
+        self.implicit_at_local(&local)
+    }
+
+    fn implicit_at_local(&mut self, local: &Point) -> Result<Implicit, PointStatus> {
+        if self.support.is_empty() {
+            return Err(PointStatus::NoNeighbours);
+        }
+        if self.support.len() < self.surface.config.min_neighbours {
+            return Err(PointStatus::TooFewNeighbours);
+        }
+        evaluate(
+            local,
+            &self.support,
+            self.surface.kernel.inv_h2(),
+            &mut self.scratch,
+        )
+    }
+
+    /// Curvature at the world-space queries `queries[i]` for `i` in `cluster`: one neighbour
+    /// search around the cluster, then each query's support filtered from it. Clusters spread
+    /// wider than the support radius are split in halves.
+    pub(super) fn curvature_of_cluster(
+        &mut self,
+        queries: &[Point],
+        cluster: &[usize],
+        radius: f64,
+    ) -> Vec<(usize, PointResult)> {
+        let origin = self.surface.origin;
+        let finite = |q: &Point| q.iter().all(|c| c.is_finite());
+        let (sum, count) = cluster
+            .iter()
+            .map(|&i| &queries[i])
+            .filter(|q| finite(q))
+            .fold((Vector::zeros(), 0usize), |(s, n), q| {
+                (s + (q - origin).coords, n + 1)
+            });
+        let centre = Point::from(sum / count.max(1) as f64);
+        let spread = cluster
+            .iter()
+            .map(|&i| &queries[i])
+            .filter(|q| finite(q))
+            .fold(0.0f64, |m, q| m.max(((q - origin) - centre).norm()));
+        if count == 0 {
+            return cluster
+                .iter()
+                .map(|&i| (i, self.curvature_at(&queries[i])))
+                .collect();
+        }
+        if spread > radius * 0.25 {
+            // A jump of the Morton curve: each half is compact again (a single query has
+            // spread 0).
+            let (left, right) = cluster.split_at(cluster.len() / 2);
+            let mut out = self.curvature_of_cluster(queries, left, radius);
+            out.extend(self.curvature_of_cluster(queries, right, radius));
+            return out;
+        }
+        self.candidates.clear();
+        let s = self.surface;
+        // The margin keeps every sample within `radius` of a query among the candidates
+        // despite rounding in `spread` and in the tree's distances: a query's support is then
+        // exactly its own, in storage order, whatever cluster it falls in (so results do not
+        // depend on how the queries are grouped or chunked).
+        let reach = (radius + spread) * (1.0 + 1e-9);
+        s.samples_within_ordered(&centre, reach, &mut self.hits, &mut self.candidates);
+        let r2 = radius * radius;
+        let inv_h2 = s.kernel.inv_h2();
+        let min_neighbours = s.config.min_neighbours;
+        cluster
+            .iter()
+            .map(|&i| {
+                let x = &queries[i];
+                if !finite(x) {
+                    return (i, Err(PointStatus::InvalidQuery));
+                }
+                let local = x - origin;
+                // Each query's support, straight into the evaluation's own storage.
+                let found = self.scratch.load(&local, &self.candidates, r2, inv_h2);
+                let result = if found == 0 {
+                    Err(PointStatus::NoNeighbours)
+                } else if found < min_neighbours {
+                    Err(PointStatus::TooFewNeighbours)
+                } else {
+                    evaluate_loaded(&mut self.scratch)
+                }
+                .and_then(|implicit| {
+                    let curvature = curvature(&implicit.gradient, &implicit.hessian)
+                        .ok_or(PointStatus::GradientVanishes)?;
+                    Ok(SurfacePoint {
+                        point: *x,
+                        curvature,
+                        implicit,
+                    })
+                });
+                (i, result)
+            })
+            .collect()
+    }
+
+    /// Curvature of the level set of g through the world-space point `x`.
+    pub fn curvature_at(&mut self, x: &Point) -> PointResult {
+        let implicit = self.implicit_at(x)?;
+        let curvature = curvature(&implicit.gradient, &implicit.hessian)
+            .ok_or(PointStatus::GradientVanishes)?;
+        Ok(SurfacePoint {
+            point: *x,
+            curvature,
+            implicit,
+        })
+    }
+
+    /// Projects the world-space point `x` onto the MLS surface (Amenta–Kil) and evaluates the
+    /// curvature there.
+    pub fn project(&mut self, x: &Point) -> PointResult {
+        if !x.iter().all(|c| c.is_finite()) {
+            return Err(PointStatus::InvalidQuery);
+        }
+        let s = self.surface;
+        let cfg = s.config.projection;
+        let h = s.kernel.h();
+        let a = s.kernel.inv_h2();
+        // The line search may walk `max_travel · h`; gathering that much farther keeps every
+        // sample that can enter the support along the way, so e(t) is smooth in t.
+        let radius = s.kernel.support_radius().map(|r| r + cfg.max_travel * h);
+        let mut local = x - s.origin;
+        let mut converged = false;
+        for _ in 0..cfg.max_iterations {
+            self.gather(&local, radius);
+            if self.support.len() < s.config.min_neighbours.max(1) {
+                return Err(if self.support.is_empty() {
+                    PointStatus::NoNeighbours
+                } else {
+                    PointStatus::TooFewNeighbours
+                });
+            }
+            self.scratch.load(&local, &self.support, f64::INFINITY, a);
+            let n = self.scratch.loaded_normal()?;
+            LineBlock::fill(&mut self.line, &local, &n, &self.support);
+            let t =
+                line_minimum(&mut self.line, a, h, &cfg).ok_or(PointStatus::ProjectionFailed)?;
+            local += n * t;
+            // Below the position's own rounding (8 ulps) no step can be resolved, whatever
+            // `tolerance · h` asks for.
+            let resolution = 8.0 * f64::EPSILON * local.coords.amax();
+            if t.abs() < (cfg.tolerance * h).max(resolution) {
+                converged = true;
+                break;
+            }
+        }
+        if !converged {
+            return Err(PointStatus::ProjectionFailed);
+        }
+        self.gather(&local, s.kernel.support_radius());
+        let implicit = self.implicit_at_local(&local)?;
+        let curvature = curvature(&implicit.gradient, &implicit.hessian)
+            .ok_or(PointStatus::GradientVanishes)?;
+        Ok(SurfacePoint {
+            point: local + s.origin,
+            curvature,
+            implicit,
+        })
+    }
+}
