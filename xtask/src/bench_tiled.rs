@@ -299,13 +299,7 @@ pub(crate) fn run(args: &[String]) -> Result<()> {
     let io = laz_io(&io_file, &work)?;
     let _ = std::fs::remove_file(&out);
 
-    let md = render(
-        &o,
-        &rows,
-        io,
-        &load_before,
-        started.elapsed().as_secs_f64(),
-    );
+    let md = render(&o, &rows, io, &load_before, started.elapsed().as_secs_f64());
     if o.quick {
         let path = work.join("quick.md");
         std::fs::write(&path, &md)?;
@@ -365,7 +359,13 @@ fn io_line(o: &Options, io: (f64, f64, f64)) -> String {
     )
 }
 
-fn render(o: &Options, rows: &[Row], io: (f64, f64, f64), load_before: &str, elapsed: f64) -> String {
+fn render(
+    o: &Options,
+    rows: &[Row],
+    io: (f64, f64, f64),
+    load_before: &str,
+    elapsed: f64,
+) -> String {
     use std::fmt::Write as _;
     let mut md = String::new();
     let _ = writeln!(md, "{BEGIN}");

@@ -9,7 +9,6 @@ use std::sync::Mutex;
 use anyhow::{Context, Result};
 use mls_io::LasReader;
 
-
 /// The budget in bytes from the machine's available memory (Linux: `MemAvailable`), leaving a
 /// fifth to the rest of the system; `None` where it cannot be read.
 pub fn available_memory() -> Option<u64> {
