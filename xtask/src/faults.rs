@@ -228,6 +228,41 @@ const FAULTS: &[Fault] = &[
         original: "pub const TRUSTED_EQUATIONS_PER_COEFFICIENT: f64 = 3.0;",
         replacement: "pub const TRUSTED_EQUATIONS_PER_COEFFICIENT: f64 = 2.0;",
     },
+    Fault {
+        name: "ST1 stream drops the last partial chunk",
+        description: "the chunk loop runs while a whole chunk remains (`start + chunk <= n`), so the queries after the last whole chunk get no result",
+        file: "crates/mls-core/src/stream.rs",
+        original: "while start < n {",
+        replacement: "while start + chunk <= n {",
+    },
+    Fault {
+        name: "ST2 next chunk starts one past the end",
+        description: "off by one between chunks: the next chunk starts at `end + 1`, so one query per chunk boundary is skipped",
+        file: "crates/mls-core/src/stream.rs",
+        original: "        start = end;",
+        replacement: "        start = end + 1;",
+    },
+    Fault {
+        name: "SP1 local spacing by (1 + 1e-9)",
+        description: "near threshold: s(p) = √(mean d²)/ρ_k · (1 + 1e-9), so the suggested h moves by 1e-9 relative",
+        file: "crates/mls-core/src/normals/spacing.rs",
+        original: "mean_d2.sqrt() / rho",
+        replacement: "mean_d2.sqrt() * (1.0 + 1e-9) / rho",
+    },
+    Fault {
+        name: "SP2 k-nearest query without the point itself",
+        description: "off by one in k: the k-d tree asked for k hits, one of them the point, so k − 1 neighbours against the grid's ρ_k",
+        file: "crates/mls-core/src/normals/spacing.rs",
+        original: "NonZeroUsize::new(k + 1)",
+        replacement: "NonZeroUsize::new(k)",
+    },
+    Fault {
+        name: "SP3 spacing as the mean",
+        description: "the spacing taken as the mean of the local spacings instead of their median",
+        file: "crates/mls-core/src/normals/spacing.rs",
+        original: "spacing: local_spacing.median,",
+        replacement: "spacing: local_spacing.mean,",
+    },
 ];
 
 /// Runs every fault, or those whose name starts with one of `only`.

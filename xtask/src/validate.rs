@@ -17,6 +17,11 @@ pub(crate) const THRESHOLD: f64 = 1e-10;
 /// routes agree less closely than on k; it is also divided by the rounding factor of the fit's
 /// conditioning (see `NORMALISATION_NOTE`). Measured worst: 1.2e-7 (full run).
 pub(crate) const SD_THRESHOLD: f64 = 1e-5;
+/// Production measures distances between points centred on their bounding box, the witness
+/// between the raw points: each coordinate then differs by a rounding of at most ε·|x| ≈ 6e-16
+/// (|x| < 3 in the sweep), about 1e-13 of the smallest spacing (0.005); the sums, square roots
+/// and the median's interpolation add a few ε. Anything above 1e-12 relative is a fault.
+pub(crate) const SPACING_THRESHOLD: f64 = 1e-12;
 /// Default base seed; every case derives its own seed from it and prints it when it is worst.
 const DEFAULT_SEED: u64 = 0x4d4c_5321;
 
@@ -85,6 +90,8 @@ pub(crate) enum Q {
     JetK2,
     JetError,
     JetChoice,
+    StreamBitwise,
+    SpacingH,
 }
 
 /// A row: its name, the threshold above which the run fails, the production entry point and
@@ -95,8 +102,9 @@ struct Row {
     entry: &'static str,
 }
 
-const CURV: &str = "`curvature_at_points`, `project_points` / `mls_ad::witness`";
-const ROWS: [Row; 30] = [
+/// The streams the CLI runs; their results are bitwise one unchunked call's (stream row).
+const CURV: &str = "`curvature_stream`, `projection_stream` / `mls_ad::witness`";
+const ROWS: [Row; 32] = [
     row("n", THRESHOLD, CURV),
     row("J", THRESHOLD, CURV),
     row("∂²n", THRESHOLD, CURV),
@@ -112,7 +120,7 @@ const ROWS: [Row; 30] = [
     row(
         "status (skip agreed by the witness)",
         0.0,
-        "`curvature_at_points`, `project_points` / `mls_ad::classify`",
+        "`curvature_stream`, `projection_stream` / `mls_ad::classify`",
     ),
     row(
         "projection e′",
@@ -194,6 +202,16 @@ const ROWS: [Row; 30] = [
         "jet support and degree",
         0.0,
         "`jet_at_points` / `mls_ad::jet_witness`",
+    ),
+    row(
+        "streamed = unchunked (bitwise)",
+        0.0,
+        "`curvature_stream`, `projection_stream` in chunks of 1, 7, all queries or the default / `curvature_at_points`, `project_points`",
+    ),
+    row(
+        "suggested h",
+        SPACING_THRESHOLD,
+        "`spacing_statistics`, `suggest_h` / `mls_ad::spacing_witness`",
     ),
 ];
 
@@ -337,9 +355,10 @@ pub(crate) fn run(o: &Options) -> Result<()> {
 }
 
 const NORMALISATION_NOTE: &str = "
-The curvature rows compare the production entry points `MlsSurface::curvature_at_points` (the
-clustered path the CLI uses; sequential and in rayon pools of 1–3 threads, with the AVX2 and
-the portable kernels) and `MlsSurface::project_points` (curvature at the projected point) with
+The curvature rows compare the production entry points `MlsSurface::curvature_stream` (the
+CLI's stream over `curvature_at_points`, the clustered path; sequential and in rayon pools of
+1–3 threads, with the AVX2 and the portable kernels) and `MlsSurface::projection_stream`
+(over `project_points`, curvature at the projected point) with
 the hyper-dual witness, whose support is a brute-force distance filter over every sample of
 the cloud. The status row counts, as 1, every point where the production's status differs from
 the witness's own verdict (`mls_ad::classify`: no or too few samples, |Σwv|/Σw < 1e-6,
@@ -362,6 +381,17 @@ predicted error is scaled by itself, at least 1e3 × its rounding floor 1e-8/ρ,
 rounding factor. Where the two routes' least estimated errors tie within 1e-4, the production's
 choice is compared with the witness's fit at that scale; the support-and-degree row counts any
 other difference in the chosen scale or degree, or a point only one side could fit, as 1.
+The stream row runs the entry points the CLI runs, `curvature_stream` and `projection_stream`,
+in chunks of 1, 7, all queries or `DEFAULT_CHUNK` (at random per case; the table below names
+the chunk size each evaluation used); their results are what the rows above compare with the
+witness, and the row counts, as 1, every case whose chunks do not tile the queries in order or
+whose results are not bitwise those of one `curvature_at_points` or `project_points` call with
+the same kernels and another thread count. The suggested-h row compares `spacing_statistics`
+then `suggest_h` on 150–300 neighbouring points of the patch (2–12 in one case of ten), with a
+few exact duplicates, k = 12 or random in 1–24, the factor 2 or random, with
+`mls_ad::spacing_witness` (every distance sorted, no k-d tree; the grid calibration counted
+shell by shell), relatively; a different k or count of distinct positions counts as 1.
+
 Each difference is made dimensionless by the natural scale of its quantity at that point, taken
 from the witness: n absolute; J by max(‖J‖, 1/h); ∂²n by max(Σ‖∂²n_a‖, 1/h²); g by ‖∇g‖·h;
 ∇g by ‖∇g‖; H by ‖H‖; k1, k2, mean by κ = ‖H‖/‖∇g‖ (the largest curvature the data can

@@ -1,12 +1,16 @@
 //! One case of the differential sweep: a random patch, its production results through the
 //! entry points users run, and the witnesses of mls-ad on supports they filter themselves.
 
+use std::ops::Range;
 use std::sync::OnceLock;
 
-use mls_core::normals::DEFAULT_DEGENERACY_TOLERANCE;
+use mls_core::normals::{
+    DEFAULT_DEGENERACY_TOLERANCE, DEFAULT_H_FACTOR, DEFAULT_SPACING_NEIGHBOURS, spacing_statistics,
+    suggest_h,
+};
 use mls_core::{
-    Cutoff, MlsConfig, MlsSurface, NormalsConfig, Parallelism, Point, Sample, Vector,
-    correct_shrinkage, estimate_normals,
+    Cutoff, DEFAULT_CHUNK, MlsConfig, MlsSurface, NormalsConfig, Parallelism, Point, PointResult,
+    Sample, Vector, correct_shrinkage, estimate_normals,
 };
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -44,6 +48,18 @@ impl Variant {
             0 => format!("`{entry}`, sequential, {isa} kernels"),
             n => format!("`{entry}`, rayon pool of {n}, {isa} kernels"),
         }
+    }
+
+    /// The name of a streaming entry point run in chunks of `chunk` of `n` queries.
+    fn chunked_name(&self, entry: &str, chunk: usize, n: usize) -> String {
+        let size = if chunk == DEFAULT_CHUNK {
+            format!("chunk {chunk} (the CLI's default)")
+        } else if chunk == n {
+            format!("chunk {chunk} (all queries)")
+        } else {
+            format!("chunk {chunk}")
+        };
+        self.name(entry).replacen(", ", &format!(", {size}, "), 1)
     }
 
     /// Runs `f` with the parallelism and kernels of this variant.
@@ -134,9 +150,27 @@ pub(crate) fn one_case(seed: u64, queries: usize) -> Tally {
         min_neighbours: config.min_neighbours,
     };
 
+    // The CLI's path: the stream, in chunks of a random size, against the witness; and
+    // bitwise against one call over all queries (same kernels, another thread count).
     let variant = Variant::random(&mut rng);
-    let results = variant.run(|par| surface.curvature_at_points(&points, par));
-    tally.entry(variant.name("curvature_at_points"), points.len());
+    let chunk = random_chunk(&mut rng, points.len());
+    let results = variant.run(|par| {
+        collect_stream(points.len(), |sink| {
+            surface.curvature_stream(&points, par, chunk, sink);
+        })
+    });
+    tally.entry(
+        variant.chunked_name("curvature_stream", chunk, points.len()),
+        points.len(),
+    );
+    let whole = Variant {
+        threads: rng.random_range(0..=3),
+        ..variant
+    };
+    let unchunked = whole.run(|par| surface.curvature_at_points(&points, par));
+    tally.entry(whole.name("curvature_at_points"), points.len());
+    record_bitwise(&mut tally, seed, &results, &unchunked);
+    let results = results.unwrap_or(unchunked);
     for (x, r) in points.iter().zip(&results) {
         ctx.check_point(&mut tally, x, r);
     }
@@ -151,8 +185,24 @@ pub(crate) fn one_case(seed: u64, queries: usize) -> Tally {
         .take(8)
         .collect();
     let variant = Variant::random(&mut rng);
-    let projected = variant.run(|par| surface.project_points(&near, par));
-    tally.entry(variant.name("project_points"), near.len());
+    let chunk = random_chunk(&mut rng, near.len());
+    let projected = variant.run(|par| {
+        collect_stream(near.len(), |sink| {
+            surface.projection_stream(&near, par, chunk, sink);
+        })
+    });
+    tally.entry(
+        variant.chunked_name("projection_stream", chunk, near.len()),
+        near.len(),
+    );
+    let whole = Variant {
+        threads: rng.random_range(0..=3),
+        ..variant
+    };
+    let unchunked = whole.run(|par| surface.project_points(&near, par));
+    tally.entry(whole.name("project_points"), near.len());
+    record_bitwise(&mut tally, seed, &projected, &unchunked);
+    let projected = projected.unwrap_or(unchunked);
     for r in &projected {
         let Ok(p) = r else {
             tally.record(Q::Status, 1.0, seed);
@@ -164,6 +214,7 @@ pub(crate) fn one_case(seed: u64, queries: usize) -> Tally {
 
     ctx.check_lines(&mut tally, &points, &normals, &mut rng);
     check_normals(&mut tally, seed, &patch, &mut rng);
+    check_spacing(&mut tally, seed, &patch, &mut rng);
     // The adaptive estimate walks five scales: every third case is enough.
     if rng.random_bool(1.0 / 3.0) {
         let variant = Variant::random(&mut rng);
@@ -176,6 +227,86 @@ pub(crate) fn one_case(seed: u64, queries: usize) -> Tally {
     }
     crate::validate_jet::compare_jets(&mut tally, seed, &patch, &surface, &points, &mut rng);
     tally
+}
+
+/// A chunk size for the streaming entry points: one query per chunk, a small prime that leaves
+/// a partial last chunk, all `n` queries in one chunk, or the CLI's default (larger than any
+/// case, so also one chunk, through the default's own arithmetic).
+fn random_chunk(rng: &mut ChaCha8Rng, n: usize) -> usize {
+    [1, 7, n.max(1), DEFAULT_CHUNK][rng.random_range(0..4)]
+}
+
+/// The results a stream delivers to its sink, or `None` unless its ranges tile `0..n` in
+/// order, each with as many results as indices.
+fn collect_stream<R: Clone>(
+    n: usize,
+    stream: impl FnOnce(&mut dyn FnMut(Range<usize>, &[R])),
+) -> Option<Vec<R>> {
+    let mut out = Vec::with_capacity(n);
+    let mut tiled = true;
+    stream(&mut |range: Range<usize>, results: &[R]| {
+        tiled &= range.start == out.len() && range.len() == results.len();
+        out.extend_from_slice(results);
+    });
+    (tiled && out.len() == n).then_some(out)
+}
+
+/// 1 unless the streamed results are bitwise those of the unchunked call. `Debug` prints each
+/// f64 in its shortest round-trip form, so equal text means equal bits (−0.0 and 0.0 differ).
+fn record_bitwise(
+    tally: &mut Tally,
+    seed: u64,
+    streamed: &Option<Vec<PointResult>>,
+    whole: &[PointResult],
+) {
+    let same = streamed
+        .as_ref()
+        .is_some_and(|s| format!("{s:?}") == format!("{whole:?}"));
+    tally.record(Q::StreamBitwise, if same { 0.0 } else { 1.0 }, seed);
+}
+
+/// `spacing_statistics` then `suggest_h` (the CLI's default scale) against the brute-force
+/// witness, on the points of the patch nearest to one of them (150–300, or 2–12 to reach the
+/// clamped k), with a few exact duplicates, k and the factor at their defaults or random.
+fn check_spacing(tally: &mut Tally, seed: u64, patch: &cases::Patch, rng: &mut ChaCha8Rng) {
+    let n = if rng.random_bool(0.1) {
+        rng.random_range(2..=12)
+    } else {
+        rng.random_range(150..=300)
+    };
+    let centre = patch.points[rng.random_range(0..patch.points.len())];
+    let mut points = patch.points.clone();
+    points.sort_by(|p, q| (p - centre).norm().total_cmp(&(q - centre).norm()));
+    points.truncate(n);
+    for _ in 0..rng.random_range(0..4) {
+        let copy = points[rng.random_range(0..points.len())];
+        points.push(copy);
+    }
+    let k = if rng.random_bool(0.5) {
+        DEFAULT_SPACING_NEIGHBOURS
+    } else {
+        rng.random_range(1..=24)
+    };
+    let factor = if rng.random_bool(0.5) {
+        DEFAULT_H_FACTOR
+    } else {
+        rng.random_range(0.5..4.0)
+    };
+    let variant = Variant::random(rng);
+    let production = variant.run(|par| {
+        spacing_statistics(&points, k, par)
+            .and_then(|stats| Ok((stats, suggest_h(&stats, factor)?)))
+    });
+    tally.entry(variant.name("spacing_statistics"), 1);
+    let witness = mls_ad::spacing_witness(&points, k, factor);
+    let value = match (production, witness) {
+        (Ok((stats, h)), Some(w)) if (stats.k, stats.distinct) == (w.k, w.distinct) => {
+            (h - w.h).abs() / w.h
+        }
+        (Err(_), None) => 0.0,
+        _ => 1.0,
+    };
+    tally.record(Q::SpacingH, value, seed);
 }
 
 /// What every check of one case needs.

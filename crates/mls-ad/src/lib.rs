@@ -3,14 +3,15 @@
 //! automatically.
 //!
 //! Architecture invariant: this crate uses mls-core's data types ([`Sample`], `PointStatus`)
-//! only, never its neighbour search, derivative, projection, normal-estimation or curvature
-//! code: every support is a brute-force distance filter ([`support`]). Generic dual-number code lives here
-//! and nowhere else.
+//! only, never its neighbour search, derivative, projection, normal-estimation, spacing or
+//! curvature code: every support is a brute-force distance filter ([`support`]). Generic
+//! dual-number code lives here and nowhere else.
 
 mod adaptive;
 mod jet;
 mod line;
 mod normals;
+mod spacing;
 mod support;
 
 pub use adaptive::{AdaptiveWitness, Ladder, adaptive_witness};
@@ -20,6 +21,7 @@ use mls_core::Sample;
 use nalgebra::{Matrix3, SVector, SymmetricEigen, Vector3};
 pub use normals::{NormalWitness, jacobi, normal_witness};
 use num_dual::{DualNum, gradient, hessian};
+pub use spacing::{SpacingWitness, grid_rms_by_shells, spacing_witness};
 pub use support::{COHERENCE_FLOOR, GRADIENT_FLOOR, classify, classify_g, support, weight_sum};
 
 /// Everything the closed form computes, recomputed by automatic differentiation.

@@ -122,3 +122,45 @@ fn closed_form_matches_hyper_dual_witness() {
     }
     eprintln!("worst relative differences g, grad, H, n, J, d2n: {worst:?}");
 }
+
+/// The spacing witness: the grid calibration's documented values, the pitch of a square grid,
+/// and `suggest_h` on small random clouds with duplicates (the full sweep is in validate).
+#[test]
+fn spacing_witness_matches_suggest_h() {
+    use mls_core::Parallelism;
+    use mls_core::normals::{spacing_statistics, suggest_h};
+    assert_eq!(mls_ad::grid_rms_by_shells(4), 1.0);
+    assert_eq!(mls_ad::grid_rms_by_shells(8), 1.5f64.sqrt());
+    // 20 × 20 nodes: the 16 × 16 at least two from the border, whose 12 nearest lie inside,
+    // are most of them, so the median is the pitch.
+    let grid: Vec<Point> = (0..400)
+        .map(|i| Point::new(0.3 * f64::from(i % 20), 0.3 * f64::from(i / 20), 0.0))
+        .collect();
+    let w = mls_ad::spacing_witness(&grid, 12, 2.0).unwrap();
+    assert!(
+        rel(w.spacing, 0.3, 0.3) < 1e-12,
+        "grid spacing {}",
+        w.spacing
+    );
+    let mut rng = ChaCha8Rng::seed_from_u64(SEED);
+    for _ in 0..20 {
+        let n = rng.random_range(3..80);
+        let mut points: Vec<Point> = (0..n)
+            .map(|_| {
+                Point::new(
+                    rng.random_range(-1.0..1.0),
+                    rng.random_range(-1.0..1.0),
+                    rng.random_range(-0.1..0.1),
+                )
+            })
+            .collect();
+        points.push(points[0]);
+        let k = rng.random_range(1..20);
+        let factor = rng.random_range(1.0..4.0);
+        let stats = spacing_statistics(&points, k, Parallelism::Sequential).unwrap();
+        let h = suggest_h(&stats, factor).unwrap();
+        let w = mls_ad::spacing_witness(&points, k, factor).unwrap();
+        assert_eq!((w.k, w.distinct), (stats.k, stats.distinct));
+        assert!(rel(h, w.h, w.h) < 1e-12, "h {h} against {}", w.h);
+    }
+}
