@@ -17,12 +17,6 @@ pub enum ConfigError {
         /// Number of normals.
         normals: usize,
     },
-    /// A point has a NaN or infinite coordinate.
-    #[error("point {index} has a non-finite coordinate")]
-    NonFinitePoint {
-        /// Index of the offending point.
-        index: usize,
-    },
     /// A normal is zero, NaN or infinite.
     #[error("normal {index}: {source}")]
     BadNormal {
@@ -31,10 +25,27 @@ pub enum ConfigError {
         /// What is wrong with it.
         source: crate::math::NormalError,
     },
-    /// The cloud is larger than the spatial index supports.
+    /// The points themselves are unusable.
+    #[error(transparent)]
+    Input(#[from] InputError),
+}
+
+/// What is wrong with a cloud's points, or with a neighbourhood size, whichever computation
+/// was asked for: surface construction ([`ConfigError::Input`]) and normal estimation
+/// ([`crate::normals::NormalsError::Input`]) check their input with the same
+/// [`check_points`] and report it alike.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum InputError {
+    /// A point has a NaN or infinite coordinate; neither the k-d tree nor any sum can use it.
+    #[error("point {index} has a non-finite coordinate")]
+    NonFinitePoint {
+        /// Index of the first offending point.
+        index: usize,
+    },
+    /// The cloud is larger than the k-d tree (u32 item indices) supports.
     #[error("too many points for the spatial index: {0} (at most {max})", max = u32::MAX)]
     TooManyPoints(usize),
-    /// A neighbourhood size of zero was asked for.
+    /// A neighbourhood size below the minimum was asked for.
     #[error("neighbourhood size k must be at least {min}, got {got}")]
     InvalidNeighbourCount {
         /// The smallest accepted value.
@@ -42,4 +53,19 @@ pub enum ConfigError {
         /// The value given.
         got: usize,
     },
+}
+
+/// Checks a cloud for the spatial index: at most `u32::MAX` points, every coordinate finite
+/// (the first offending point is named).
+///
+/// # Errors
+/// [`InputError::TooManyPoints`] or [`InputError::NonFinitePoint`].
+pub fn check_points(points: &[crate::Point]) -> Result<(), InputError> {
+    if points.len() > u32::MAX as usize {
+        return Err(InputError::TooManyPoints(points.len()));
+    }
+    match points.iter().position(|p| !p.iter().all(|c| c.is_finite())) {
+        Some(index) => Err(InputError::NonFinitePoint { index }),
+        None => Ok(()),
+    }
 }

@@ -37,7 +37,7 @@ pub use adaptive::{
     correct_shrinkage,
 };
 pub use curvature::{Curvature, curvature};
-pub use error::ConfigError;
+pub use error::{ConfigError, InputError, check_points};
 pub use field::{Implicit, NormalField, Sample};
 pub use jet::{JetConfig, JetFit, JetPoint, NormalData};
 pub use kernel::{Cutoff, Kernel};

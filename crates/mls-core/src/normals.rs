@@ -37,6 +37,7 @@ pub use spacing::{
     square_grid_rms_distance, suggest_h,
 };
 
+use crate::error::InputError;
 use crate::math::{Point, Vector};
 use crate::status::PointStatus;
 use crate::surface::Parallelism;
@@ -51,24 +52,9 @@ pub const DEFAULT_NEIGHBOURS: usize = 16;
 /// are [`PointStatus::NormalEstimationFailed`] in the result.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum NormalsError {
-    /// A neighbourhood size below the minimum was asked for.
-    #[error("neighbourhood size k must be at least {min}, got {got}")]
-    InvalidNeighbourCount {
-        /// The smallest accepted value.
-        min: usize,
-        /// The value given.
-        got: usize,
-    },
-    /// A point has a NaN or infinite coordinate; neither the kd-tree nor the covariance can
-    /// use it.
-    #[error("point {index} has a non-finite coordinate")]
-    NonFinitePoint {
-        /// Index of the offending point.
-        index: usize,
-    },
-    /// The cloud is larger than the kd-tree (u32 item indices) supports.
-    #[error("too many points for the spatial index: {0} (at most {max})", max = u32::MAX)]
-    TooManyPoints(usize),
+    /// The points themselves, or the neighbourhood size, are unusable.
+    #[error(transparent)]
+    Input(#[from] InputError),
     /// The neighbour graph has more edges than the orientation's 32-bit edge numbering holds
     /// (points × k above 2³²).
     #[error("neighbour graph too large to orient: {0} edges (at most {max})", max = u32::MAX)]
@@ -224,15 +210,6 @@ fn check_tolerance(t: f64) -> Result<(), NormalsError> {
     }
 }
 
-/// Checks that the cloud fits the kd-tree and has only finite coordinates.
-fn check_points(points: &[Point]) -> Result<(), NormalsError> {
-    if points.len() > u32::MAX as usize {
-        return Err(NormalsError::TooManyPoints(points.len()));
-    }
-    match points.iter().position(|p| !p.iter().all(|c| c.is_finite())) {
-        Some(index) => Err(NormalsError::NonFinitePoint { index }),
-        None => Ok(()),
-    }
-}
+pub(crate) use crate::error::check_points;
 
 pub(crate) use crate::math::bounding_box_centre;

@@ -13,7 +13,7 @@ use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use rayon::prelude::*;
 
 use crate::curvature::Curvature;
-use crate::error::ConfigError;
+use crate::error::{ConfigError, InputError, check_points};
 use crate::field::{Implicit, Sample};
 pub use crate::frame::Frame;
 use crate::frame::morton_key;
@@ -103,12 +103,7 @@ impl MlsSurface {
                 normals: normals.len(),
             });
         }
-        if points.len() > u32::MAX as usize {
-            return Err(ConfigError::TooManyPoints(points.len()));
-        }
-        if let Some(index) = points.iter().position(|p| !p.iter().all(|c| c.is_finite())) {
-            return Err(ConfigError::NonFinitePoint { index });
-        }
+        check_points(points)?;
         let Frame {
             origin,
             half_extent,
@@ -133,7 +128,7 @@ impl MlsSurface {
         samples.par_sort_by_cached_key(|s| morton_key(&s.point, half_extent));
         let coords: Vec<[f64; 3]> = samples.iter().map(|s| s.point.coords.into()).collect();
         let tree = ImmutableKdTree::new_from_slice(&coords)
-            .map_err(|_| ConfigError::TooManyPoints(points.len()))?;
+            .map_err(|_| InputError::TooManyPoints(points.len()))?;
         Ok(Self {
             origin,
             samples,

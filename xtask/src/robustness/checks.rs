@@ -3,6 +3,7 @@
 //! its base cloud when it is translated, scaled or duplicated; and its normals estimated and
 //! run through the whole pipeline. Each broken property is a failure in the [`Outcome`].
 
+use mls_core::InputError;
 use mls_core::normals::{NormalsConfig, NormalsError, estimate_normals};
 use mls_core::{
     ConfigError, Cutoff, MlsConfig, MlsSurface, Parallelism, Point, PointResult, PointStatus,
@@ -39,7 +40,7 @@ fn check_surface(cloud: &AdversarialCloud, par: Parallelism, out: &mut Outcome) 
     let surface = match (&cloud.expectation, built) {
         (
             Expectation::NonFinitePoint { index },
-            Err(ConfigError::NonFinitePoint { index: got }),
+            Err(ConfigError::Input(InputError::NonFinitePoint { index: got })),
         ) if got == *index => {
             out.construction_error = Some("NonFinitePoint");
             return;
@@ -292,7 +293,7 @@ fn check_normals(cloud: &AdversarialCloud, par: Parallelism, out: &mut Outcome) 
     let est = match (&cloud.expectation, estimated) {
         (
             Expectation::NonFinitePoint { index },
-            Err(NormalsError::NonFinitePoint { index: got }),
+            Err(NormalsError::Input(InputError::NonFinitePoint { index: got })),
         ) if got == *index => {
             out.normals_error = Some("NonFinitePoint");
             return;

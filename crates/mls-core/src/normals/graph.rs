@@ -6,6 +6,7 @@ use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use rayon::prelude::*;
 
 use super::{NormalsError, bounding_box_centre, check_points};
+use crate::error::InputError;
 use crate::math::Point;
 use crate::surface::Parallelism;
 
@@ -30,7 +31,7 @@ impl NeighbourGraph {
     /// candidates (a regular grid) which one is kept is unspecified; the distances are exact.
     pub fn build(points: &[Point], k: usize, par: Parallelism) -> Result<Self, NormalsError> {
         if k == 0 {
-            return Err(NormalsError::InvalidNeighbourCount { min: 1, got: 0 });
+            return Err(InputError::InvalidNeighbourCount { min: 1, got: 0 }.into());
         }
         check_points(points)?;
         let n = points.len();
@@ -46,7 +47,7 @@ impl NeighbourGraph {
         let centre = bounding_box_centre(points);
         let coords: Vec<[f64; 3]> = points.iter().map(|p| (p.coords - centre).into()).collect();
         let tree = ImmutableKdTree::<f64, 3>::new_from_slice(&coords)
-            .map_err(|_| NormalsError::TooManyPoints(n))?;
+            .map_err(|_| InputError::TooManyPoints(n))?;
         let fill = |(i, row): (usize, &mut [u32])| fill_row(&tree, &coords, i, row);
         match par {
             Parallelism::Sequential => neighbours.chunks_mut(k_eff).enumerate().for_each(fill),

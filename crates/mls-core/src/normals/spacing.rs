@@ -5,6 +5,7 @@ use std::num::NonZeroUsize;
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 
 use super::{NormalsError, bounding_box_centre, check_points, check_scale};
+use crate::error::InputError;
 use crate::math::Point;
 use crate::surface::Parallelism;
 
@@ -116,7 +117,7 @@ pub fn spacing_statistics(
     par: Parallelism,
 ) -> Result<SpacingStats, NormalsError> {
     if k == 0 {
-        return Err(NormalsError::InvalidNeighbourCount { min: 1, got: 0 });
+        return Err(InputError::InvalidNeighbourCount { min: 1, got: 0 }.into());
     }
     check_points(points)?;
     let centre = bounding_box_centre(points);
@@ -138,7 +139,7 @@ pub fn spacing_statistics(
     }
     let k_eff = k.min(distinct - 1);
     let tree = ImmutableKdTree::<f64, 3>::new_from_slice(&coords)
-        .map_err(|_| NormalsError::TooManyPoints(points.len()))?;
+        .map_err(|_| InputError::TooManyPoints(points.len()))?;
     let rho = square_grid_rms_distance(k_eff);
     let per_point = |i: usize| local_distances(&tree, &coords, i, k_eff, rho);
     let rows: Vec<[f64; 3]> = par.map(distinct, 256, per_point);

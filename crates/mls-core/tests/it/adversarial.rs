@@ -7,6 +7,7 @@
 
 use std::panic::{AssertUnwindSafe, catch_unwind};
 
+use mls_core::InputError;
 use mls_core::normals::{NormalsConfig, NormalsError, estimate_normals};
 use mls_core::{
     ConfigError, Cutoff, MlsConfig, MlsSurface, Parallelism, Point, PointResult, PointStatus,
@@ -61,7 +62,8 @@ fn check(cloud: &AdversarialCloud) -> Vec<String> {
     let built = MlsSurface::new(&cloud.points, &cloud.normals, config(cloud));
     match (&cloud.expectation, built) {
         (Expectation::NonFinitePoint { index }, built) => {
-            if !matches!(built, Err(ConfigError::NonFinitePoint { index: i }) if i == *index) {
+            if !matches!(built, Err(ConfigError::Input(InputError::NonFinitePoint { index: i })) if i == *index)
+            {
                 fails.push(format!("surface: {:?}", built.map(|_| ())));
             }
         }
@@ -177,7 +179,11 @@ fn check_normals(cloud: &AdversarialCloud) -> Vec<String> {
     let est = match (&cloud.expectation, est) {
         (Expectation::NonFinitePoint { index }, est) => {
             return match est {
-                Err(NormalsError::NonFinitePoint { index: i }) if i == *index => Vec::new(),
+                Err(NormalsError::Input(InputError::NonFinitePoint { index: i }))
+                    if i == *index =>
+                {
+                    Vec::new()
+                }
                 other => vec![format!("normals: {:?}", other.map(|_| ()))],
             };
         }
@@ -252,11 +258,11 @@ fn non_finite_input_is_a_typed_error_naming_the_point() {
     let normals = [Vector::z(); 4];
     assert_eq!(
         MlsSurface::new(&points, &normals, MlsConfig::new(1.0)).unwrap_err(),
-        ConfigError::NonFinitePoint { index: 2 }
+        ConfigError::Input(InputError::NonFinitePoint { index: 2 })
     );
     assert_eq!(
         estimate_normals(&points, &NormalsConfig::default(), Parallelism::Sequential).unwrap_err(),
-        NormalsError::NonFinitePoint { index: 2 }
+        NormalsError::Input(InputError::NonFinitePoint { index: 2 })
     );
     let mut normals = normals;
     normals[1] = Vector::new(0.0, f64::NAN, 1.0);

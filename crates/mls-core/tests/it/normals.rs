@@ -8,7 +8,7 @@ use mls_core::normals::{
     orient_normals, orient_normals_towards, orientation_consistency, spacing_statistics,
     square_grid_rms_distance, suggest_h,
 };
-use mls_core::{Matrix, Parallelism, Point, PointStatus, Vector};
+use mls_core::{InputError, Matrix, Parallelism, Point, PointStatus, Vector};
 use nalgebra::{Rotation3, SymmetricEigen};
 use proptest::prelude::*;
 use rand::{Rng, SeedableRng};
@@ -497,7 +497,10 @@ fn invalid_parameters_are_errors() {
     };
     assert_eq!(
         with(|c| c.k = 0),
-        Err(NormalsError::InvalidNeighbourCount { min: 1, got: 0 })
+        Err(NormalsError::Input(InputError::InvalidNeighbourCount {
+            min: 1,
+            got: 0
+        }))
     );
     assert_eq!(
         with(|c| c.h = Some(0.0)),
@@ -523,7 +526,7 @@ fn invalid_parameters_are_errors() {
     bad[7].y = f64::INFINITY;
     assert_eq!(
         estimate_normals(&bad, &NormalsConfig::default(), PAR).map(|_| ()),
-        Err(NormalsError::NonFinitePoint { index: 7 })
+        Err(NormalsError::Input(InputError::NonFinitePoint { index: 7 }))
     );
     let graph = NeighbourGraph::build(&points, 8, PAR).unwrap();
     assert!(matches!(
