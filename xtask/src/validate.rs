@@ -183,30 +183,22 @@ const ROWS: [Row; 32] = [
         THRESHOLD,
         "`adaptive_curvature` / `mls_ad::adaptive_witness`",
     ),
-    row(
-        "jet k1",
-        THRESHOLD,
-        "`jet_at_points` / `mls_ad::jet_witness`",
-    ),
-    row(
-        "jet k2",
-        THRESHOLD,
-        "`jet_at_points` / `mls_ad::jet_witness`",
-    ),
+    row("jet k1", THRESHOLD, "`jet_stream` / `mls_ad::jet_witness`"),
+    row("jet k2", THRESHOLD, "`jet_stream` / `mls_ad::jet_witness`"),
     row(
         "jet predicted error",
         SD_THRESHOLD,
-        "`jet_at_points` / `mls_ad::jet_witness`",
+        "`jet_stream` / `mls_ad::jet_witness`",
     ),
     row(
         "jet support and degree",
         0.0,
-        "`jet_at_points` / `mls_ad::jet_witness`",
+        "`jet_stream` / `mls_ad::jet_witness`",
     ),
     row(
         "streamed = unchunked (bitwise)",
         0.0,
-        "`curvature_stream`, `projection_stream` in chunks of 1, 7, all queries or the default / `curvature_at_points`, `project_points`",
+        "`curvature_stream`, `projection_stream`, `jet_stream` in chunks of 1, 7, all queries or the default / `curvature_at_points`, `project_points`, `jet_at_points`",
     ),
     row(
         "suggested h",
@@ -373,7 +365,7 @@ neighbourhood and a Jacobi eigen-solve: sin(angle)·(λ1 − λ0)/λ2 (the Davis
 normal only as accurate as the eigengap allows) and the variation λ0/Σλ absolutely. The exp
 rows are the worst distance in units in the last place over a dense sweep of arguments.
 
-The jet rows compare `MlsSurface::jet_at_points` with `mls_ad::jet_witness` on the same queries
+The jet rows compare `MlsSurface::jet_stream` (in chunks, bitwise `jet_at_points`) with `mls_ad::jet_witness` on the same queries
 (heights only or with slopes, at random). k1, k2 are scaled by κ = max(|k1|, |k2|, 1/h) and
 divided by max(1, 1e3·ε·cond(M)/threshold), the rounding any least-squares route carries on a
 fit whose normal matrix has condition number cond(M) (up to about 1e10 is admitted); the

@@ -9,8 +9,8 @@ use mls_core::normals::{
     suggest_h,
 };
 use mls_core::{
-    Cutoff, DEFAULT_CHUNK, MlsConfig, MlsSurface, NormalsConfig, Parallelism, Point, PointResult,
-    Sample, Vector, correct_shrinkage, estimate_normals,
+    Cutoff, DEFAULT_CHUNK, MlsConfig, MlsSurface, NormalsConfig, Parallelism, Point, Sample,
+    Vector, correct_shrinkage, estimate_normals,
 };
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -25,20 +25,20 @@ pub(crate) const QUERIES_PER_CASE: usize = 24;
 /// How a production entry point is run: sequentially on this thread, or in a rayon pool of
 /// `threads` threads; with the best kernels of the CPU or the portable ones.
 #[derive(Clone, Copy, Debug)]
-struct Variant {
-    threads: usize,
-    portable: bool,
+pub(crate) struct Variant {
+    pub(crate) threads: usize,
+    pub(crate) portable: bool,
 }
 
 impl Variant {
-    fn random(rng: &mut ChaCha8Rng) -> Self {
+    pub(crate) fn random(rng: &mut ChaCha8Rng) -> Self {
         Self {
             threads: rng.random_range(0..=3),
             portable: rng.random_bool(0.5),
         }
     }
 
-    fn name(&self, entry: &str) -> String {
+    pub(crate) fn name(&self, entry: &str) -> String {
         let isa = if self.portable {
             "portable"
         } else {
@@ -51,7 +51,7 @@ impl Variant {
     }
 
     /// The name of a streaming entry point run in chunks of `chunk` of `n` queries.
-    fn chunked_name(&self, entry: &str, chunk: usize, n: usize) -> String {
+    pub(crate) fn chunked_name(&self, entry: &str, chunk: usize, n: usize) -> String {
         let size = if chunk == DEFAULT_CHUNK {
             format!("chunk {chunk} (the CLI's default)")
         } else if chunk == n {
@@ -63,7 +63,7 @@ impl Variant {
     }
 
     /// Runs `f` with the parallelism and kernels of this variant.
-    fn run<T: Send>(&self, f: impl FnOnce(Parallelism) -> T + Send) -> T {
+    pub(crate) fn run<T: Send>(&self, f: impl FnOnce(Parallelism) -> T + Send) -> T {
         if self.threads == 0 {
             mls_core::kernels::set_portable_kernels(self.portable);
             let out = f(Parallelism::Sequential);
@@ -232,13 +232,13 @@ pub(crate) fn one_case(seed: u64, queries: usize) -> Tally {
 /// A chunk size for the streaming entry points: one query per chunk, a small prime that leaves
 /// a partial last chunk, all `n` queries in one chunk, or the CLI's default (larger than any
 /// case, so also one chunk, through the default's own arithmetic).
-fn random_chunk(rng: &mut ChaCha8Rng, n: usize) -> usize {
+pub(crate) fn random_chunk(rng: &mut ChaCha8Rng, n: usize) -> usize {
     [1, 7, n.max(1), DEFAULT_CHUNK][rng.random_range(0..4)]
 }
 
 /// The results a stream delivers to its sink, or `None` unless its ranges tile `0..n` in
 /// order, each with as many results as indices.
-fn collect_stream<R: Clone>(
+pub(crate) fn collect_stream<R: Clone>(
     n: usize,
     stream: impl FnOnce(&mut dyn FnMut(Range<usize>, &[R])),
 ) -> Option<Vec<R>> {
@@ -253,11 +253,11 @@ fn collect_stream<R: Clone>(
 
 /// 1 unless the streamed results are bitwise those of the unchunked call. `Debug` prints each
 /// f64 in its shortest round-trip form, so equal text means equal bits (−0.0 and 0.0 differ).
-fn record_bitwise(
+pub(crate) fn record_bitwise<R: std::fmt::Debug>(
     tally: &mut Tally,
     seed: u64,
-    streamed: &Option<Vec<PointResult>>,
-    whole: &[PointResult],
+    streamed: &Option<Vec<R>>,
+    whole: &[R],
 ) {
     let same = streamed
         .as_ref()
