@@ -264,17 +264,46 @@ impl MlsSurface {
         &self,
         x: &Point,
         radius: f64,
-        hits: &mut Vec<u32>,
+        hits: &mut Hits,
         out: &mut Vec<Sample>,
     ) {
-        hits.clear();
+        let Hits { items, marks } = hits;
+        items.clear();
+        let (mut lo, mut hi) = (u32::MAX, 0);
         self.tree
             .query(&x.coords.into())
             .within::<SquaredEuclidean<f64>>(radius * radius)
             .unsorted()
-            .visit(|hit| hits.push(hit.item));
-        hits.sort_unstable();
-        out.extend(hits.iter().map(|&i| self.samples[i as usize]));
+            .visit(|hit| {
+                lo = lo.min(hit.item);
+                hi = hi.max(hit.item);
+                items.push(hit.item);
+            });
+        let Some(span) = (hi as usize + 1).checked_sub(lo as usize) else {
+            return;
+        };
+        // Storage is in Morton order, so a ball's samples usually lie in a few runs of
+        // indices: marking them in a bitmap of the span and reading it back in order costs
+        // less than sorting. A ball that straddles a jump of the curve spans more: sort.
+        if span <= 32 * items.len() {
+            marks.clear();
+            marks.resize(span.div_ceil(64), 0);
+            for &i in items.iter() {
+                let d = (i - lo) as usize;
+                marks[d / 64] |= 1 << (d % 64);
+            }
+            for (w, &word) in marks.iter().enumerate() {
+                let mut bits = word;
+                while bits != 0 {
+                    let i = lo as usize + w * 64 + bits.trailing_zeros() as usize;
+                    out.push(self.samples[i]);
+                    bits &= bits - 1;
+                }
+            }
+        } else {
+            items.sort_unstable();
+            out.extend(items.iter().map(|&i| self.samples[i as usize]));
+        }
     }
 
     fn map_queries<F>(&self, queries: &[Point], par: Parallelism, f: F) -> Vec<PointResult>
@@ -290,6 +319,13 @@ impl MlsSurface {
             |ev, i| f(ev, &queries[i]),
         )
     }
+}
+
+/// Scratch of [`MlsSurface::samples_within_ordered`]: the tree's hits and a bitmap of them.
+#[derive(Debug, Default)]
+pub(crate) struct Hits {
+    items: Vec<u32>,
+    marks: Vec<u64>,
 }
 
 /// Queries sharing one neighbour search in [`MlsSurface::curvature_at_points`]; also the unit

@@ -3,7 +3,7 @@
 //! curvature at a point, the projection onto the surface, the polynomial jet). It holds the
 //! buffers they reuse, so that after warm-up no query allocates.
 
-use super::{MlsSurface, PointResult, SurfacePoint};
+use super::{Hits, MlsSurface, PointResult, SurfacePoint};
 use crate::curvature::curvature;
 use crate::field::{FieldScratch, Implicit, Sample, evaluate, evaluate_loaded};
 use crate::jet::{self, JetConfig, JetPoint};
@@ -19,7 +19,7 @@ impl MlsSurface {
             surface: self,
             support: Vec::new(),
             candidates: Vec::new(),
-            hits: Vec::new(),
+            hits: Hits::default(),
             scratch: FieldScratch::default(),
             line: Vec::new(),
             ladder: Vec::new(),
@@ -35,8 +35,8 @@ pub struct Evaluator<'a> {
     support: Vec<Sample>,
     /// Samples near a cluster of queries, filtered per query into `support`.
     candidates: Vec<Sample>,
-    /// Indices of `candidates`, sorted into storage order (at most `u32::MAX` samples).
-    hits: Vec<u32>,
+    /// The neighbour search's hits, put into storage order.
+    hits: Hits,
     scratch: FieldScratch,
     line: Vec<LineBlock>,
     /// The jet's fits up the ladder of scales at one query.
