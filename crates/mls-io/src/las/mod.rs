@@ -48,8 +48,9 @@ fn batch_points(chunk: Option<u32>) -> usize {
     let threads = rayon::current_num_threads().max(1);
     let chunks = TARGET.div_ceil(chunk);
     if chunk.saturating_mul(threads) > 4 * TARGET {
-        // Chunks so large that one per thread would cost more than the bound.
-        return chunk * chunks;
+        // Chunks so large that one per thread would cost more than the bound: the codec
+        // keeps the rest of a chunk for the next call.
+        return (chunk * chunks).min(4 * TARGET);
     }
     chunk * chunks.next_multiple_of(threads)
 }
@@ -116,10 +117,14 @@ mod tests {
         for chunk in [1, 1_000, 50_000, 100_000, 1 << 18] {
             let batch = batch_points(Some(chunk));
             let chunk = chunk as usize;
-            assert_eq!(batch % (chunk * threads), 0, "chunk {chunk}");
-            assert!(batch >= 1 << 18 && batch < (1 << 18) + 2 * chunk * threads);
+            if chunk * threads <= 4 << 18 {
+                assert_eq!(batch % (chunk * threads), 0, "chunk {chunk}");
+                assert!(batch >= 1 << 18 && batch < (1 << 18) + 2 * chunk * threads);
+            } else {
+                assert!(((1 << 18)..=(4 << 18)).contains(&batch), "chunk {chunk}");
+            }
         }
-        assert_eq!(batch_points(Some(10_000_000)), 10_000_000);
+        assert_eq!(batch_points(Some(10_000_000)), 4 << 18);
         assert_eq!(batch_points(None), 1 << 18);
         assert_eq!(batch_points(Some(0)), 1 << 18);
     }

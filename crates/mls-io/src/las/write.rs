@@ -5,9 +5,8 @@ use std::fs::File;
 use std::io::{self, BufWriter, Cursor, Seek, Write};
 
 use las::point::Format;
-use rayon::prelude::*;
-
 use las::{Builder, PointDataBuilder, Transform, Vector, Version, Vlr, Writer};
+use rayon::prelude::*;
 
 use super::LasTemplate;
 use super::dims::{self, Field};
