@@ -7,7 +7,7 @@ use rand_chacha::ChaCha8Rng;
 
 use crate::validate::{Q, SD_THRESHOLD, THRESHOLD, Tally};
 use crate::validate_shapes as cases;
-use crate::validate_sweep::{Variant, collect_stream, random_chunk, record_bitwise};
+use crate::validate_sweep::streamed;
 
 /// The jet estimator through the whole-cloud entry point against its witness, which filters
 /// its support from every sample of the patch by brute force.
@@ -36,27 +36,16 @@ pub(crate) fn compare_jets(
             normal: n.normalize(),
         })
         .collect();
-    // The CLI's path: the stream in chunks of a random size, bitwise against one call over all
-    // queries (same kernels, another thread count), then against the witness.
-    let variant = Variant::random(rng);
-    let chunk = random_chunk(rng, queries.len());
-    let streamed = variant.run(|par| {
-        collect_stream(queries.len(), |sink| {
-            surface.jet_stream(queries, &config, par, chunk, sink);
-        })
-    });
-    tally.entry(
-        variant.chunked_name("jet_stream", chunk, queries.len()),
+    // The CLI's path: the stream in chunks of a random size, then against the witness.
+    let results = streamed(
+        tally,
+        seed,
+        rng,
         queries.len(),
+        ("jet_stream", "jet_at_points"),
+        |par, chunk, sink| surface.jet_stream(queries, &config, par, chunk, sink),
+        |par| surface.jet_at_points(queries, &config, par),
     );
-    let whole = Variant {
-        threads: rng.random_range(0..=3),
-        ..variant
-    };
-    let unchunked = whole.run(|par| surface.jet_at_points(queries, &config, par));
-    tally.entry(whole.name("jet_at_points"), queries.len());
-    record_bitwise(tally, seed, &streamed, &unchunked);
-    let results = streamed.unwrap_or(unchunked);
     for (x, r) in queries.iter().zip(results) {
         let candidates = mls_ad::jet_candidates(&x.coords, &samples, patch.h, &config);
         // The witness's choice; a production choice of another accepted scale whose estimated

@@ -150,27 +150,16 @@ pub(crate) fn one_case(seed: u64, queries: usize) -> Tally {
         min_neighbours: config.min_neighbours,
     };
 
-    // The CLI's path: the stream, in chunks of a random size, against the witness; and
-    // bitwise against one call over all queries (same kernels, another thread count).
-    let variant = Variant::random(&mut rng);
-    let chunk = random_chunk(&mut rng, points.len());
-    let results = variant.run(|par| {
-        collect_stream(points.len(), |sink| {
-            surface.curvature_stream(&points, par, chunk, sink);
-        })
-    });
-    tally.entry(
-        variant.chunked_name("curvature_stream", chunk, points.len()),
+    // The CLI's path: the stream, in chunks of a random size, against the witness.
+    let results = streamed(
+        &mut tally,
+        seed,
+        &mut rng,
         points.len(),
+        ("curvature_stream", "curvature_at_points"),
+        |par, chunk, sink| surface.curvature_stream(&points, par, chunk, sink),
+        |par| surface.curvature_at_points(&points, par),
     );
-    let whole = Variant {
-        threads: rng.random_range(0..=3),
-        ..variant
-    };
-    let unchunked = whole.run(|par| surface.curvature_at_points(&points, par));
-    tally.entry(whole.name("curvature_at_points"), points.len());
-    record_bitwise(&mut tally, seed, &results, &unchunked);
-    let results = results.unwrap_or(unchunked);
     for (x, r) in points.iter().zip(&results) {
         ctx.check_point(&mut tally, x, r);
     }
@@ -184,25 +173,15 @@ pub(crate) fn one_case(seed: u64, queries: usize) -> Tally {
         .map(|(x, _)| *x)
         .take(8)
         .collect();
-    let variant = Variant::random(&mut rng);
-    let chunk = random_chunk(&mut rng, near.len());
-    let projected = variant.run(|par| {
-        collect_stream(near.len(), |sink| {
-            surface.projection_stream(&near, par, chunk, sink);
-        })
-    });
-    tally.entry(
-        variant.chunked_name("projection_stream", chunk, near.len()),
+    let projected = streamed(
+        &mut tally,
+        seed,
+        &mut rng,
         near.len(),
+        ("projection_stream", "project_points"),
+        |par, chunk, sink| surface.projection_stream(&near, par, chunk, sink),
+        |par| surface.project_points(&near, par),
     );
-    let whole = Variant {
-        threads: rng.random_range(0..=3),
-        ..variant
-    };
-    let unchunked = whole.run(|par| surface.project_points(&near, par));
-    tally.entry(whole.name("project_points"), near.len());
-    record_bitwise(&mut tally, seed, &projected, &unchunked);
-    let projected = projected.unwrap_or(unchunked);
     for r in &projected {
         let Ok(p) = r else {
             tally.record(Q::Status, 1.0, seed);
@@ -227,6 +206,33 @@ pub(crate) fn one_case(seed: u64, queries: usize) -> Tally {
     }
     crate::validate_jet::compare_jets(&mut tally, seed, &patch, &surface, &points, &mut rng);
     tally
+}
+
+/// Runs a stream of `n` results in chunks of a random size and one unchunked call of the same
+/// entry point (same kernels, another random thread count), names both in the report and
+/// records whether they agree bit for bit. Returns the streamed results, or the unchunked
+/// ones if the stream did not deliver every index once, in order (the bitwise row has failed).
+pub(crate) fn streamed<R: Clone + Send + std::fmt::Debug>(
+    tally: &mut Tally,
+    seed: u64,
+    rng: &mut ChaCha8Rng,
+    n: usize,
+    (stream_name, whole_name): (&str, &str),
+    stream: impl FnOnce(Parallelism, usize, &mut dyn FnMut(Range<usize>, &[R])) + Send,
+    whole: impl FnOnce(Parallelism) -> Vec<R> + Send,
+) -> Vec<R> {
+    let variant = Variant::random(rng);
+    let chunk = random_chunk(rng, n);
+    let results = variant.run(|par| collect_stream(n, |sink| stream(par, chunk, sink)));
+    tally.entry(variant.chunked_name(stream_name, chunk, n), n);
+    let unchunked_variant = Variant {
+        threads: rng.random_range(0..=3),
+        ..variant
+    };
+    let unchunked = unchunked_variant.run(whole);
+    tally.entry(unchunked_variant.name(whole_name), n);
+    record_bitwise(tally, seed, &results, &unchunked);
+    results.unwrap_or(unchunked)
 }
 
 /// A chunk size for the streaming entry points: one query per chunk, a small prime that leaves
