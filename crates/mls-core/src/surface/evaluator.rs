@@ -286,15 +286,7 @@ impl Evaluator<'_> {
                 } else {
                     evaluate_loaded(&mut self.scratch)
                 }
-                .and_then(|implicit| {
-                    let curvature = curvature(&implicit.gradient, &implicit.hessian)
-                        .ok_or(PointStatus::GradientVanishes)?;
-                    Ok(SurfacePoint {
-                        point: *x,
-                        curvature,
-                        implicit,
-                    })
-                });
+                .and_then(|implicit| surface_point(x, implicit));
                 (i, result)
             })
             .collect()
@@ -302,14 +294,7 @@ impl Evaluator<'_> {
 
     /// Curvature of the level set of g through the world-space point `x`.
     pub fn curvature_at(&mut self, x: &Point) -> PointResult {
-        let implicit = self.implicit_at(x)?;
-        let curvature = curvature(&implicit.gradient, &implicit.hessian)
-            .ok_or(PointStatus::GradientVanishes)?;
-        Ok(SurfacePoint {
-            point: *x,
-            curvature,
-            implicit,
-        })
+        surface_point(x, self.implicit_at(x)?)
     }
 
     /// Projects the world-space point `x` onto the MLS surface (Amenta–Kil) and evaluates the
@@ -363,4 +348,15 @@ impl Evaluator<'_> {
             implicit,
         })
     }
+}
+
+/// The curvature of the level set of g through `x`, from g's derivatives there.
+fn surface_point(x: &Point, implicit: Implicit) -> PointResult {
+    let curvature =
+        curvature(&implicit.gradient, &implicit.hessian).ok_or(PointStatus::GradientVanishes)?;
+    Ok(SurfacePoint {
+        point: *x,
+        curvature,
+        implicit,
+    })
 }
