@@ -92,8 +92,8 @@ const FAULTS: &[Fault] = &[
         name: "S1 search radius × 0.64",
         description: "the k-d tree query radius 0.64 × cutoff·h (issue 12's audit)",
         file: "crates/mls-core/src/surface.rs",
-        original: "hits.clear();\n        self.tree\n            .query(&x.coords.into())\n            .within::<SquaredEuclidean<f64>>(radius * radius)",
-        replacement: "hits.clear();\n        self.tree\n            .query(&x.coords.into())\n            .within::<SquaredEuclidean<f64>>((0.64 * radius) * (0.64 * radius))",
+        original: "let (mut lo, mut hi) = (u32::MAX, 0);\n        self.tree\n            .query(&x.coords.into())\n            .within::<SquaredEuclidean<f64>>(radius * radius)",
+        replacement: "let (mut lo, mut hi) = (u32::MAX, 0);\n        self.tree\n            .query(&x.coords.into())\n            .within::<SquaredEuclidean<f64>>((0.64 * radius) * (0.64 * radius))",
     },
     Fault {
         name: "S2 cluster reach = radius",
