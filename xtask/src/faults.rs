@@ -403,3 +403,26 @@ fn copy_recursively(src: &Path, dest: &Path) -> Result<()> {
     }
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::FAULTS;
+
+    /// Every fault's text is in its file exactly once, so that `cargo xtask faults` can apply
+    /// it: a refactor that rewrites the patched lines fails here, in `cargo test`, rather than
+    /// in the hour-long fault run.
+    #[test]
+    fn every_fault_applies() {
+        let root = crate::project_root();
+        for f in FAULTS {
+            let source = std::fs::read_to_string(root.join(f.file)).expect(f.file);
+            assert_eq!(
+                source.matches(f.original).count(),
+                1,
+                "fault `{}`: its text is not in {} exactly once",
+                f.name,
+                f.file
+            );
+        }
+    }
+}
