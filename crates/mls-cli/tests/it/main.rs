@@ -19,6 +19,7 @@ mod las;
 mod normals;
 mod overwrite;
 mod project;
+mod reference;
 mod render;
 mod sphere;
 mod streams;
