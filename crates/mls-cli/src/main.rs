@@ -176,7 +176,8 @@ struct CurvatureArgs {
     /// Choose h per point: from the scale given by --h or --h-factor up to 4 times it, the
     /// largest scale whose estimate agrees with the smaller ones within the local noise, with
     /// the h² bias extrapolated away. Adds the columns `h` and `noise`. For noisy scans; on
-    /// clean data use it with `--at projected`. Builds five surfaces (memory and time grow).
+    /// clean data use it with `--at projected`. Up to five evaluations per point (the scales share
+    /// one index of the samples).
     /// `--method paper` only (the jet chooses its support per point by itself).
     #[arg(long)]
     adaptive: bool,

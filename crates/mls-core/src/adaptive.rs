@@ -153,7 +153,8 @@ pub fn adaptive_curvature(
 }
 
 /// The MLS surfaces of one cloud at every scale of the ladder, built once and evaluated in as
-/// many batches of queries as wanted. Holds one [`MlsSurface`] per scale.
+/// many batches of queries as wanted. Holds one [`MlsSurface`] per scale, all sharing one set of
+/// samples and one k-d tree ([`MlsSurface::with_config`]).
 #[derive(Debug)]
 pub struct AdaptiveSurface {
     config: AdaptiveConfig,
@@ -167,19 +168,17 @@ impl AdaptiveSurface {
         normals: &[Vector],
         config: &AdaptiveConfig,
     ) -> Result<Self, ConfigError> {
-        let ladder = (0..config.scales.max(2))
-            .map(|j| {
-                let h = config.scale(j);
-                MlsSurface::new(
-                    points,
-                    normals,
-                    MlsConfig {
-                        h,
-                        ..config.surface
-                    },
-                )
-            })
-            .collect::<Result<_, _>>()?;
+        let at_scale = |j: usize| MlsConfig {
+            h: config.scale(j),
+            ..config.surface
+        };
+        // One set of samples and one tree, shared by every scale.
+        let first = MlsSurface::new(points, normals, at_scale(0))?;
+        let mut ladder = Vec::with_capacity(config.scales.max(2));
+        for j in 1..config.scales.max(2) {
+            ladder.push(first.with_config(at_scale(j))?);
+        }
+        ladder.insert(0, first);
         Ok(Self {
             config: *config,
             ladder,

@@ -9,6 +9,8 @@ mod evaluator;
 
 pub use evaluator::Evaluator;
 
+use std::sync::Arc;
+
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use rayon::prelude::*;
 
@@ -66,13 +68,21 @@ pub type PointResult = Result<SurfacePoint, PointStatus>;
 /// The MLS surface of an oriented point cloud.
 #[derive(Debug)]
 pub struct MlsSurface {
+    /// Shared by the surfaces of one cloud at other scales ([`Self::with_config`]).
+    index: Arc<SampleIndex>,
+    kernel: Kernel,
+    config: MlsConfig,
+}
+
+/// The oriented samples of a surface in storage (Morton) order and their k-d tree: what does
+/// not depend on h, built once per cloud.
+#[derive(Debug)]
+struct SampleIndex {
     /// Points are stored relative to `origin` (their bounding-box centre) so that coordinates
     /// far from zero (georeferenced scans) do not cost precision in `x − q`.
     origin: Vector,
     samples: Vec<Sample>,
     tree: ImmutableKdTree<f64, 3>,
-    kernel: Kernel,
-    config: MlsConfig,
 }
 
 impl MlsSurface {
@@ -130,10 +140,23 @@ impl MlsSurface {
         let tree = ImmutableKdTree::new_from_slice(&coords)
             .map_err(|_| InputError::TooManyPoints(points.len()))?;
         Ok(Self {
-            origin,
-            samples,
-            tree,
+            index: Arc::new(SampleIndex {
+                origin,
+                samples,
+                tree,
+            }),
             kernel,
+            config,
+        })
+    }
+
+    /// The surface of the same samples with another configuration (another h, cutoff…): the
+    /// samples and their tree are shared, not rebuilt, and its results are bitwise those of
+    /// [`Self::with_frame`] with the same points, normals and frame.
+    pub fn with_config(&self, config: MlsConfig) -> Result<Self, ConfigError> {
+        Ok(Self {
+            index: Arc::clone(&self.index),
+            kernel: Kernel::new(config.h, config.cutoff)?,
             config,
         })
     }
@@ -150,12 +173,12 @@ impl MlsSurface {
 
     /// Number of samples.
     pub fn len(&self) -> usize {
-        self.samples.len()
+        self.index.samples.len()
     }
 
     /// Whether the cloud is empty.
     pub fn is_empty(&self) -> bool {
-        self.samples.is_empty()
+        self.index.samples.is_empty()
     }
 
     /// Curvature at each query point (the level set of g through it), in query order.
@@ -215,8 +238,8 @@ impl MlsSurface {
         let half_extent = queries
             .iter()
             .filter(|q| q.iter().all(|c| c.is_finite()))
-            .fold(0.0f64, |m, q| m.max((q - self.origin).coords.amax()));
-        let key = |i: &usize| morton_key(&(queries[*i] - self.origin), half_extent);
+            .fold(0.0f64, |m, q| m.max((q - self.index.origin).coords.amax()));
+        let key = |i: &usize| morton_key(&(queries[*i] - self.index.origin), half_extent);
         let mut order: Vec<usize> = (0..queries.len()).collect();
         let pairs: Vec<(usize, PointResult)> = match par {
             Parallelism::Sequential => {
@@ -248,6 +271,22 @@ impl MlsSurface {
         par.map(queries.len(), 1, gather)
     }
 
+    fn map_queries<F>(&self, queries: &[Point], par: Parallelism, f: F) -> Vec<PointResult>
+    where
+        F: Fn(&mut Evaluator<'_>, &Point) -> PointResult + Sync,
+    {
+        // Pieces of a few hundred points amortise the evaluator set-up and keep each
+        // thread's buffers warm.
+        par.map_init(
+            queries.len(),
+            256,
+            || self.evaluator(),
+            |ev, i| f(ev, &queries[i]),
+        )
+    }
+}
+
+impl SampleIndex {
     /// Appends to `out` the samples within `radius` of `x` (internal frame), in tree order.
     fn samples_within(&self, x: &Point, radius: f64, out: &mut Vec<Sample>) {
         self.tree
@@ -305,23 +344,9 @@ impl MlsSurface {
             out.extend(items.iter().map(|&i| self.samples[i as usize]));
         }
     }
-
-    fn map_queries<F>(&self, queries: &[Point], par: Parallelism, f: F) -> Vec<PointResult>
-    where
-        F: Fn(&mut Evaluator<'_>, &Point) -> PointResult + Sync,
-    {
-        // Pieces of a few hundred points amortise the evaluator set-up and keep each
-        // thread's buffers warm.
-        par.map_init(
-            queries.len(),
-            256,
-            || self.evaluator(),
-            |ev, i| f(ev, &queries[i]),
-        )
-    }
 }
 
-/// Scratch of [`MlsSurface::samples_within_ordered`]: the tree's hits and a bitmap of them.
+/// Scratch of [`SampleIndex::samples_within_ordered`]: the tree's hits and a bitmap of them.
 #[derive(Debug, Default)]
 pub(crate) struct Hits {
     items: Vec<u32>,

@@ -51,7 +51,7 @@ impl Evaluator<'_> {
         if !x.iter().all(|c| c.is_finite()) {
             return Err(PointStatus::InvalidQuery);
         }
-        let local = x - self.surface.origin;
+        let local = x - self.surface.index.origin;
         let h = self.surface.kernel.h();
         let mut frame = None;
         let mut best: Option<JetPoint> = None;
@@ -74,7 +74,7 @@ impl Evaluator<'_> {
                 // In storage order, so that the fit's sums do not depend on the tree's shape
                 // (a tile's tree differs from the whole cloud's; see [`Frame`]).
                 self.support.clear();
-                self.surface.samples_within_ordered(
+                self.surface.index.samples_within_ordered(
                     &local,
                     gathered,
                     &mut self.hits,
@@ -176,20 +176,20 @@ impl Evaluator<'_> {
         self.support.clear();
         let s = self.surface;
         match radius {
-            Some(r) => s.samples_within(x, r, &mut self.support),
-            None => self.support.extend_from_slice(&s.samples),
+            Some(r) => s.index.samples_within(x, r, &mut self.support),
+            None => self.support.extend_from_slice(&s.index.samples),
         }
     }
 
     /// The samples within the kernel support of the world-space point `x`, in world space. For
     /// independent re-computation (the AD witness) of what this evaluator computes.
     pub fn support_of(&mut self, x: &Point) -> Vec<Sample> {
-        let local = x - self.surface.origin;
+        let local = x - self.surface.index.origin;
         self.gather(&local, self.surface.kernel.support_radius());
         self.support
             .iter()
             .map(|s| Sample {
-                point: s.point + self.surface.origin,
+                point: s.point + self.surface.index.origin,
                 normal: s.normal,
             })
             .collect()
@@ -200,7 +200,7 @@ impl Evaluator<'_> {
         if !x.iter().all(|c| c.is_finite()) {
             return Err(PointStatus::InvalidQuery);
         }
-        let local = x - self.surface.origin;
+        let local = x - self.surface.index.origin;
         self.gather(&local, self.surface.kernel.support_radius());
         self.implicit_at_local(&local)
     }
@@ -229,7 +229,7 @@ impl Evaluator<'_> {
         cluster: &[usize],
         radius: f64,
     ) -> Vec<(usize, PointResult)> {
-        let origin = self.surface.origin;
+        let origin = self.surface.index.origin;
         let finite = |q: &Point| q.iter().all(|c| c.is_finite());
         let (sum, count) = cluster
             .iter()
@@ -265,7 +265,8 @@ impl Evaluator<'_> {
         // exactly its own, in storage order, whatever cluster it falls in (so results do not
         // depend on how the queries are grouped or chunked).
         let reach = (radius + spread) * (1.0 + 1e-9);
-        s.samples_within_ordered(&centre, reach, &mut self.hits, &mut self.candidates);
+        s.index
+            .samples_within_ordered(&centre, reach, &mut self.hits, &mut self.candidates);
         let r2 = radius * radius;
         let inv_h2 = s.kernel.inv_h2();
         let min_neighbours = s.config.min_neighbours;
@@ -310,7 +311,7 @@ impl Evaluator<'_> {
         // The line search may walk `max_travel · h`; gathering that much farther keeps every
         // sample that can enter the support along the way, so e(t) is smooth in t.
         let radius = s.kernel.support_radius().map(|r| r + cfg.max_travel * h);
-        let mut local = x - s.origin;
+        let mut local = x - s.index.origin;
         let mut converged = false;
         for _ in 0..cfg.max_iterations {
             self.gather(&local, radius);
@@ -343,7 +344,7 @@ impl Evaluator<'_> {
         let curvature = curvature(&implicit.gradient, &implicit.hessian)
             .ok_or(PointStatus::GradientVanishes)?;
         Ok(SurfacePoint {
-            point: local + s.origin,
+            point: local + s.index.origin,
             curvature,
             implicit,
         })

@@ -122,3 +122,37 @@ fn stream_results_do_not_depend_on_chunk_size_or_threads() {
     });
     assert_bitwise(&reference.0, &sequential, "curvature, sequential");
 }
+
+/// A surface made from another by `with_config` (shared samples and tree, another h and
+/// cutoff) gives bitwise the results of one built from scratch with that configuration.
+#[test]
+fn a_surface_sharing_its_index_equals_one_built_from_scratch() {
+    let (surface, queries) = torus_cloud();
+    let torus = Torus::new(6.0, 2.0);
+    let samples = mls_shapes::random(&torus, 4_000, CLOUD_SEED);
+    let points: Vec<Point> = samples.iter().map(|s| s.surface.point).collect();
+    let normals: Vec<Vector> = samples.iter().map(|s| s.surface.normal).collect();
+    for config in [
+        MlsConfig::new(1.1),
+        MlsConfig {
+            cutoff: mls_core::Cutoff::Radius(3.0),
+            ..MlsConfig::new(0.45)
+        },
+    ] {
+        let shared = surface.with_config(config).unwrap();
+        let fresh = MlsSurface::new(&points, &normals, config).unwrap();
+        let par = Parallelism::Rayon;
+        let what = format!("h = {}", config.h);
+        assert_bitwise(
+            &shared.curvature_at_points(&queries, par),
+            &fresh.curvature_at_points(&queries, par),
+            &format!("curvature, {what}"),
+        );
+        assert_bitwise(
+            &shared.jet_at_points(&queries, &JetConfig::default(), par),
+            &fresh.jet_at_points(&queries, &JetConfig::default(), par),
+            &format!("jet, {what}"),
+        );
+    }
+    assert!(surface.with_config(MlsConfig::new(-1.0)).is_err());
+}
