@@ -166,22 +166,22 @@ const ROWS: [Row; 32] = [
     row(
         "adaptive scale and extrapolation choice",
         0.0,
-        "`adaptive_curvature` / `mls_ad::adaptive_witness`",
+        "`AdaptiveSurface::curvature_stream` / `mls_ad::adaptive_witness`",
     ),
     row(
         "adaptive k1, k2, mean, gauss",
         THRESHOLD,
-        "`adaptive_curvature` / `mls_ad::adaptive_witness`",
+        "`AdaptiveSurface::curvature_stream` / `mls_ad::adaptive_witness`",
     ),
     row(
         "adaptive noise σ (as σ²·dof / Σwr²)",
         THRESHOLD,
-        "`adaptive_curvature` / `mls_ad::adaptive_witness`",
+        "`AdaptiveSurface::curvature_stream` / `mls_ad::adaptive_witness`",
     ),
     row(
         "adaptive predicted scatter",
         THRESHOLD,
-        "`adaptive_curvature` / `mls_ad::adaptive_witness`",
+        "`AdaptiveSurface::curvature_stream` / `mls_ad::adaptive_witness`",
     ),
     row("jet k1", THRESHOLD, "`jet_stream` / `mls_ad::jet_witness`"),
     row("jet k2", THRESHOLD, "`jet_stream` / `mls_ad::jet_witness`"),
@@ -198,7 +198,7 @@ const ROWS: [Row; 32] = [
     row(
         "streamed = unchunked (bitwise)",
         0.0,
-        "`curvature_stream`, `projection_stream`, `jet_stream` in chunks of 1, 7, all queries or the default / `curvature_at_points`, `project_points`, `jet_at_points`",
+        "`curvature_stream`, `projection_stream`, `jet_stream`, the adaptive `curvature_stream` in chunks of 1, 7, all queries or the default / `curvature_at_points`, `project_points`, `jet_at_points`, `adaptive_curvature`",
     ),
     row(
         "suggested h",

@@ -1,8 +1,9 @@
-//! The adaptive-scale rows of `cargo xtask validate`: `adaptive_curvature` (the CLI's
+//! The adaptive-scale rows of `cargo xtask validate`: the adaptive stream (the CLI's
 //! `--adaptive`) on a noisy copy of each case's cloud against `mls_ad::adaptive_witness`.
 
 use mls_core::{
-    AdaptiveConfig, Location, Parallelism, Point, Sample, adaptive::NOISE_GAIN, adaptive_curvature,
+    AdaptiveConfig, AdaptiveSurface, Location, Point, Sample, adaptive::NOISE_GAIN,
+    adaptive_curvature,
 };
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
@@ -18,7 +19,6 @@ pub(crate) fn check_adaptive(
     seed: u64,
     patch: &cases::Patch,
     queries: &[Point],
-    par: Parallelism,
     rng: &mut ChaCha8Rng,
 ) {
     // Uniform position noise along the normals, up to a tenth of h: the noise estimate then has
@@ -32,17 +32,30 @@ pub(crate) fn check_adaptive(
         .collect();
     let config = AdaptiveConfig::new(0.5 * patch.h);
     let queries = &queries[..QUERIES.min(queries.len())];
-    let Ok(results) = adaptive_curvature(
-        &points,
-        &patch.normals,
-        queries,
-        Location::Input,
-        &config,
-        par,
-    ) else {
+    let Ok(surface) = AdaptiveSurface::new(&points, &patch.normals, &config) else {
         tally.record(Q::AdaptiveChoice, 1.0, seed);
         return;
     };
+    // The CLI's path (the stream, in chunks of a random size) against one whole call.
+    let results = crate::validate_sweep::streamed(
+        tally,
+        seed,
+        rng,
+        queries.len(),
+        ("adaptive curvature_stream", "adaptive_curvature"),
+        |par, chunk, sink| surface.curvature_stream(queries, Location::Input, par, chunk, sink),
+        |par| {
+            adaptive_curvature(
+                &points,
+                &patch.normals,
+                queries,
+                Location::Input,
+                &config,
+                par,
+            )
+            .unwrap_or_default()
+        },
+    );
     let samples: Vec<Sample> = points
         .iter()
         .zip(&patch.normals)

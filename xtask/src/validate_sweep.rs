@@ -196,13 +196,7 @@ pub(crate) fn one_case(seed: u64, queries: usize) -> Tally {
     check_spacing(&mut tally, seed, &patch, &mut rng);
     // The adaptive estimate walks five scales: every third case is enough.
     if rng.random_bool(1.0 / 3.0) {
-        let variant = Variant::random(&mut rng);
-        variant.run(|par| {
-            crate::validate_adaptive::check_adaptive(
-                &mut tally, seed, &patch, &points, par, &mut rng,
-            )
-        });
-        tally.entry(variant.name("adaptive_curvature"), 4);
+        crate::validate_adaptive::check_adaptive(&mut tally, seed, &patch, &points, &mut rng);
     }
     crate::validate_jet::compare_jets(&mut tally, seed, &patch, &surface, &points, &mut rng);
     tally
