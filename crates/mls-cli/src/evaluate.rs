@@ -227,16 +227,8 @@ pub fn curvature(
 
 /// Builds the surface `mlscurv curvature` evaluates, for [`crate::pipeline::prepare`]'s
 /// `build`: one scale, or a scale per point with `adaptive`.
-pub fn curvature_surface(
-    adaptive: bool,
-) -> impl FnOnce(
-    &[Point],
-    &[Vector],
-    f64,
-    mls_core::Cutoff,
-    mls_core::Frame,
-) -> Result<Surface, mls_core::ConfigError> {
-    move |p, n, h, cutoff, frame| {
+pub fn curvature_surface(adaptive: bool) -> impl crate::pipeline::BuildSurface<Surface> {
+    move |cloud, n: &[Vector], h, cutoff| {
         Ok(if adaptive {
             let config = mls_core::AdaptiveConfig {
                 surface: mls_core::MlsConfig {
@@ -245,9 +237,9 @@ pub fn curvature_surface(
                 },
                 ..mls_core::AdaptiveConfig::new(h)
             };
-            Surface::Adaptive(AdaptiveSurface::new(p, n, &config)?)
+            Surface::Adaptive(AdaptiveSurface::from_cloud(cloud, n, &config)?)
         } else {
-            Surface::Fixed(crate::pipeline::fixed_surface(p, n, h, cutoff, frame)?)
+            Surface::Fixed(crate::pipeline::fixed_surface(cloud, n, h, cutoff)?)
         })
     }
 }

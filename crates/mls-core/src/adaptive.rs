@@ -30,6 +30,7 @@
 //! whose shrinkage bias is large, the smallest scales are kept and extrapolation removes the
 //! bias. `docs/paper.md` measures both.
 
+use crate::cloud::IndexedCloud;
 use crate::curvature::Curvature;
 use crate::error::ConfigError;
 use crate::math::{Point, Vector};
@@ -88,6 +89,14 @@ impl AdaptiveConfig {
     /// The largest scale of the ladder.
     pub fn h_max(&self) -> f64 {
         self.scale(self.scales.max(2) - 1)
+    }
+
+    /// The surface's configuration at scale `j`.
+    fn surface_at(&self, j: usize) -> MlsConfig {
+        MlsConfig {
+            h: self.scale(j),
+            ..self.surface
+        }
     }
 }
 
@@ -168,15 +177,25 @@ impl AdaptiveSurface {
         normals: &[Vector],
         config: &AdaptiveConfig,
     ) -> Result<Self, ConfigError> {
-        let at_scale = |j: usize| MlsConfig {
-            h: config.scale(j),
-            ..config.surface
-        };
-        // One set of samples and one tree, shared by every scale.
-        let first = MlsSurface::new(points, normals, at_scale(0))?;
+        let first = MlsSurface::new(points, normals, config.surface_at(0))?;
+        Self::over(first, config)
+    }
+
+    /// The surfaces of the ladder over an indexed cloud with its `normals` (in input order).
+    pub fn from_cloud(
+        cloud: IndexedCloud,
+        normals: &[Vector],
+        config: &AdaptiveConfig,
+    ) -> Result<Self, ConfigError> {
+        let first = MlsSurface::from_cloud(cloud, normals, config.surface_at(0))?;
+        Self::over(first, config)
+    }
+
+    /// The ladder from its first surface: one set of samples and one tree for every scale.
+    fn over(first: MlsSurface, config: &AdaptiveConfig) -> Result<Self, ConfigError> {
         let mut ladder = Vec::with_capacity(config.scales.max(2));
         for j in 1..config.scales.max(2) {
-            ladder.push(first.with_config(at_scale(j))?);
+            ladder.push(first.with_config(config.surface_at(j))?);
         }
         ladder.insert(0, first);
         Ok(Self {

@@ -16,6 +16,7 @@
 //! Architecture invariant: this crate does no I/O and holds no generic dual-number code.
 
 pub mod adaptive;
+pub mod cloud;
 pub mod curvature;
 pub mod error;
 pub mod field;
@@ -36,6 +37,7 @@ pub use adaptive::{
     AdaptiveConfig, AdaptivePoint, AdaptiveResult, AdaptiveSurface, Location, adaptive_curvature,
     correct_shrinkage,
 };
+pub use cloud::IndexedCloud;
 pub use curvature::{Curvature, curvature};
 pub use error::{ConfigError, InputError, check_points};
 pub use field::{Implicit, NormalField, Sample};

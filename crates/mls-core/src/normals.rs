@@ -36,6 +36,7 @@ pub use spacing::{
     DEFAULT_H_FACTOR, DEFAULT_SPACING_NEIGHBOURS, DistanceStats, SpacingStats, spacing_statistics,
     square_grid_rms_distance, suggest_h,
 };
+pub(crate) use spacing::{spacing_of_local, spacing_on_tree};
 
 use crate::error::InputError;
 use crate::math::{Point, Vector};

@@ -14,8 +14,9 @@ use std::sync::Arc;
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use rayon::prelude::*;
 
+use crate::cloud::IndexedCloud;
 use crate::curvature::Curvature;
-use crate::error::{ConfigError, InputError, check_points};
+use crate::error::{ConfigError, check_points};
 use crate::field::{Implicit, Sample};
 pub use crate::frame::Frame;
 use crate::frame::morton_key;
@@ -48,6 +49,17 @@ impl MlsConfig {
             min_neighbours: 3,
             projection: ProjectionConfig::default(),
         }
+    }
+}
+
+/// Checks that every normal can be normalised, naming the first (in input order) that cannot.
+fn check_normals(normals: &[Vector]) -> Result<(), ConfigError> {
+    match normals.iter().position(|n| UnitNormal::new(*n).is_err()) {
+        None => Ok(()),
+        Some(index) => Err(ConfigError::BadNormal {
+            index,
+            source: UnitNormal::new(normals[index]).unwrap_err(),
+        }),
     }
 }
 
@@ -106,7 +118,7 @@ impl MlsSurface {
         config: MlsConfig,
         frame: Frame,
     ) -> Result<Self, ConfigError> {
-        let kernel = Kernel::new(config.h, config.cutoff)?;
+        Kernel::new(config.h, config.cutoff)?;
         if points.len() != normals.len() {
             return Err(ConfigError::LengthMismatch {
                 points: points.len(),
@@ -114,34 +126,47 @@ impl MlsSurface {
             });
         }
         check_points(points)?;
-        let Frame {
-            origin,
-            half_extent,
-        } = frame;
-        let samples = points
-            .iter()
-            .zip(normals)
-            .enumerate()
-            .map(|(index, (p, n))| {
-                let normal = UnitNormal::new(*n)
-                    .map_err(|source| ConfigError::BadNormal { index, source })?;
-                Ok(Sample {
-                    point: p - origin,
-                    normal: normal.into_inner(),
-                })
-            })
-            .collect::<Result<Vec<Sample>, ConfigError>>()?;
+        check_normals(normals)?;
+        let cloud = IndexedCloud::with_frame(points, frame, Parallelism::Rayon)?;
+        Self::from_cloud(cloud, normals, config)
+    }
+
+    /// The surface of an indexed cloud with its `normals` (in input order, non-zero and
+    /// consistently oriented; normalised here): the cloud's order and tree become the
+    /// surface's, so nothing is sorted or indexed again. Bitwise [`Self::with_frame`] of the
+    /// same points in the cloud's frame.
+    pub fn from_cloud(
+        cloud: IndexedCloud,
+        normals: &[Vector],
+        config: MlsConfig,
+    ) -> Result<Self, ConfigError> {
+        let kernel = Kernel::new(config.h, config.cutoff)?;
+        if cloud.len() != normals.len() {
+            return Err(ConfigError::LengthMismatch {
+                points: cloud.len(),
+                normals: normals.len(),
+            });
+        }
+        check_normals(normals)?;
+        let IndexedCloud {
+            frame,
+            order,
+            local,
+            tree,
+        } = cloud;
         // Neighbours of a query are then mostly adjacent in memory, whatever the input order
         // (scan order, or a Fibonacci spiral whose neighbours are thousands of indices apart).
-        let mut samples = samples;
-        // Stable: samples with one key keep their input order, which a subset keeps too.
-        samples.par_sort_by_cached_key(|s| morton_key(&s.point, half_extent));
-        let coords: Vec<[f64; 3]> = samples.iter().map(|s| s.point.coords.into()).collect();
-        let tree = ImmutableKdTree::new_from_slice(&coords)
-            .map_err(|_| InputError::TooManyPoints(points.len()))?;
+        let samples: Vec<Sample> = Parallelism::Rayon.map(order.len(), 4096, |s| {
+            let normal = UnitNormal::new(normals[order[s] as usize]).expect("checked above");
+            Sample {
+                point: Point::from(local[s]),
+                normal: normal.into_inner(),
+            }
+        });
+        drop(local);
         Ok(Self {
             index: Arc::new(SampleIndex {
-                origin,
+                origin: frame.origin,
                 samples,
                 tree,
             }),

@@ -6,12 +6,13 @@ use std::path::Path;
 
 use anyhow::{Context, Result, bail};
 use mls_core::{
-    AdaptiveSurface, ConfigError, Cutoff, Frame, MlsConfig, MlsSurface, Parallelism, Point, Vector,
+    AdaptiveSurface, ConfigError, Cutoff, Frame, IndexedCloud, MlsConfig, MlsSurface, Parallelism,
+    Point, Vector,
 };
 use mls_io::PointCloud;
 
 use super::{
-    Carried, MIN_POINTS, Normals, Scale, Timings, check_scale, choose_h, input_name, normals,
+    Carried, MIN_POINTS, Normals, Scale, Timings, check_scale, choose_h_on, input_name, normals,
     print_warning, read, scan_viewpoints,
 };
 use crate::{Format, SurfaceOptions};
@@ -29,23 +30,16 @@ pub fn eval_surface(
     mut warn: impl FnMut(String),
 ) -> Result<(Scale, MlsSurface)> {
     let par = Parallelism::Rayon;
+    let cloud = t.time("index", || index(points, Frame::of(points), file))?;
     let scale = t.time("spacing", || {
-        choose_h(points, h, mls_core::normals::DEFAULT_H_FACTOR, par, file)
+        choose_h_on(&cloud, h, mls_core::normals::DEFAULT_H_FACTOR, par, file)
     })?;
     for w in check_scale(points, &scale, cutoff, file)? {
         warn(w);
     }
     let normals: Vec<Vector> = normals.iter().map(|n| Vector::from(*n)).collect();
     let surface = t.time("index", || {
-        MlsSurface::new(
-            points,
-            &normals,
-            MlsConfig {
-                cutoff,
-                ..MlsConfig::new(scale.h)
-            },
-        )
-        .with_context(|| file.to_owned())
+        fixed_surface(cloud, &normals, scale.h, cutoff).with_context(|| file.to_owned())
     })?;
     Ok((scale, surface))
 }
@@ -81,23 +75,39 @@ pub enum Surface {
     Adaptive(AdaptiveSurface),
 }
 
-/// Builds one fixed-scale surface in `frame`.
+/// Builds one fixed-scale surface over `cloud` with its `normals`.
 pub fn fixed_surface(
-    points: &[Point],
+    cloud: IndexedCloud,
     normals: &[Vector],
     h: f64,
     cutoff: Cutoff,
-    frame: Frame,
 ) -> Result<MlsSurface, ConfigError> {
-    MlsSurface::with_frame(
-        points,
+    MlsSurface::from_cloud(
+        cloud,
         normals,
         MlsConfig {
             cutoff,
             ..MlsConfig::new(h)
         },
-        frame,
     )
+}
+
+/// `points` checked and indexed in `frame` (see `mls_core::IndexedCloud`).
+pub fn index(points: &[Point], frame: Frame, file: &str) -> Result<IndexedCloud> {
+    IndexedCloud::with_frame(points, frame, Parallelism::Rayon)
+        .map_err(ConfigError::from)
+        .with_context(|| file.to_owned())
+}
+
+/// What builds a surface over an indexed cloud and its normals (in input order), with h and
+/// the cutoff: a fixed scale ([`fixed_surface`]) or the adaptive ladder.
+pub trait BuildSurface<S>:
+    FnOnce(IndexedCloud, &[Vector], f64, Cutoff) -> Result<S, ConfigError>
+{
+}
+impl<S, F: FnOnce(IndexedCloud, &[Vector], f64, Cutoff) -> Result<S, ConfigError>> BuildSurface<S>
+    for F
+{
 }
 
 /// Reads the input, then builds the surface as [`build_surface`] does, timing each stage and
@@ -108,7 +118,7 @@ pub fn prepare<S>(
     columns: Option<&mls_io::ColumnNames>,
     s: &SurfaceOptions,
     t: &mut Timings,
-    build: impl FnOnce(&[Point], &[Vector], f64, Cutoff, Frame) -> Result<S, ConfigError>,
+    build: impl BuildSurface<S>,
 ) -> Result<Prepared<S>> {
     let cloud = t.time("read", || read(input, format, columns))?;
     let viewpoints = scan_viewpoints(&cloud);
@@ -153,10 +163,14 @@ pub fn build_surface<S>(
     s: &SurfaceOptions,
     t: &mut Timings,
     mut warn: impl FnMut(String),
-    build: impl FnOnce(&[Point], &[Vector], f64, Cutoff, Frame) -> Result<S, ConfigError>,
+    build: impl BuildSurface<S>,
 ) -> Result<Built<S>> {
     let par = Parallelism::Rayon;
-    let scale = t.time("spacing", || choose_h(points, s.h, s.h_factor, par, file))?;
+    // One index for the spacing and the surface.
+    let cloud = t.time("index", || index(points, Frame::of(points), file))?;
+    let scale = t.time("spacing", || {
+        choose_h_on(&cloud, s.h, s.h_factor, par, file)
+    })?;
     for w in check_scale(points, &scale, s.cutoff, file)? {
         warn(w);
     }
@@ -177,7 +191,7 @@ pub fn build_surface<S>(
         )
     })?;
     let surface = t.time("index", || {
-        surface(points, normals, scale.h, s.cutoff, file, build)
+        surface(cloud, points, normals, scale.h, s.cutoff, file, build)
     })?;
     Ok(Built {
         scale,
@@ -190,16 +204,24 @@ pub fn build_surface<S>(
 /// Builds the surface from the points that have normals, consuming the normals, in the frame
 /// of all `points` (those without a normal too): so a tile of a cloud, built in the whole
 /// cloud's frame, gives bitwise the whole cloud's results (see `mls_core::tiling`), whichever
-/// points lack a normal.
+/// points lack a normal. `cloud` is `points` indexed in their frame: it becomes the surface's
+/// index when every point has a normal.
 pub fn surface<S>(
+    cloud: IndexedCloud,
     points: &[Point],
     normals: Vec<Option<Vector>>,
     h: f64,
     cutoff: Cutoff,
     file: &str,
-    build: impl FnOnce(&[Point], &[Vector], f64, Cutoff, Frame) -> Result<S, ConfigError>,
+    build: impl BuildSurface<S>,
 ) -> Result<S> {
-    surface_in(points, normals, h, cutoff, Frame::of(points), file, build)
+    if normals.iter().all(Option::is_some) {
+        let n: Vec<Vector> = normals.into_iter().flatten().collect();
+        return build(cloud, &n, h, cutoff).with_context(|| file.to_owned());
+    }
+    let frame = cloud.frame();
+    drop(cloud);
+    surface_in(points, normals, h, cutoff, frame, file, build)
 }
 
 /// [`surface`] in a given frame: a tile's, the whole cloud's.
@@ -210,7 +232,7 @@ pub fn surface_in<S>(
     cutoff: Cutoff,
     frame: Frame,
     file: &str,
-    build: impl FnOnce(&[Point], &[Vector], f64, Cutoff, Frame) -> Result<S, ConfigError>,
+    build: impl BuildSurface<S>,
 ) -> Result<S> {
     // Usually every point has a normal: the points are then passed as they are, not copied.
     let with_normal = normals.iter().filter(|n| n.is_some()).count();
@@ -229,5 +251,6 @@ pub fn surface_in<S>(
             p.len()
         );
     }
-    build(p, &n, h, cutoff, frame).with_context(|| file.to_owned())
+    let cloud = index(p, frame, file)?;
+    build(cloud, &n, h, cutoff).with_context(|| file.to_owned())
 }

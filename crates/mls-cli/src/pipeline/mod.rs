@@ -16,8 +16,8 @@ use anyhow::{Context, Result};
 use mls_core::PointStatus;
 
 pub use self::build::{
-    Built, Prepared, Surface, build_surface, eval_surface, fixed_surface, prepare, surface,
-    surface_in,
+    BuildSurface, Built, Prepared, Surface, build_surface, eval_surface, fixed_surface, index,
+    prepare, surface, surface_in,
 };
 pub(crate) use self::input::is_stdio;
 pub use self::input::{
@@ -25,7 +25,7 @@ pub use self::input::{
     read_quietly, to_points,
 };
 pub use self::oriented::{Normals, normals, scan_viewpoints};
-pub use self::scale::{Scale, check_scale, choose_h, print_warning};
+pub use self::scale::{Scale, check_scale, choose_h, choose_h_on, print_warning};
 pub use crate::output::{Carried, Output, check_output, write_stdout};
 
 /// The smallest cloud a neighbourhood can be built from: a covariance normal needs 3 points
@@ -54,11 +54,16 @@ impl Timings {
         self.measure(stage, f)
     }
 
-    /// Runs and times `stage`, which draws its own progress.
+    /// Runs and times `stage`, which draws its own progress. A stage timed twice (the index:
+    /// the cloud's, then the surface made from it) is reported once, with the sum.
     pub fn measure<T>(&mut self, stage: &'static str, f: impl FnOnce() -> T) -> T {
         let t = Instant::now();
         let out = f();
-        self.0.push((stage, t.elapsed().as_secs_f64()));
+        let seconds = t.elapsed().as_secs_f64();
+        match self.0.iter_mut().find(|(s, _)| *s == stage) {
+            Some((_, total)) => *total += seconds,
+            None => self.0.push((stage, seconds)),
+        }
         out
     }
 }

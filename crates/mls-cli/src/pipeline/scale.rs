@@ -3,7 +3,7 @@
 
 use anyhow::{Context, Result, bail};
 use mls_core::normals::{DEFAULT_SPACING_NEIGHBOURS, SpacingStats, spacing_statistics, suggest_h};
-use mls_core::{Cutoff, Parallelism, Point};
+use mls_core::{Cutoff, IndexedCloud, Parallelism, Point};
 
 /// The chosen h and a sentence on why.
 #[derive(Debug)]
@@ -155,6 +155,31 @@ pub fn choose_h(
     par: Parallelism,
     file: &str,
 ) -> Result<Scale> {
+    choose_h_from(h, factor, file, || {
+        spacing_statistics(points, DEFAULT_SPACING_NEIGHBOURS, par)
+    })
+}
+
+/// [`choose_h`] on an indexed cloud (the same h, without another tree).
+pub fn choose_h_on(
+    cloud: &IndexedCloud,
+    h: Option<f64>,
+    factor: f64,
+    par: Parallelism,
+    file: &str,
+) -> Result<Scale> {
+    choose_h_from(h, factor, file, || {
+        cloud.spacing_statistics(DEFAULT_SPACING_NEIGHBOURS, par)
+    })
+}
+
+/// h given, or `factor` × the spacing that `stats` measures.
+fn choose_h_from(
+    h: Option<f64>,
+    factor: f64,
+    file: &str,
+    stats: impl FnOnce() -> Result<SpacingStats, mls_core::NormalsError>,
+) -> Result<Scale> {
     if let Some(h) = h {
         return Ok(Scale {
             h,
@@ -163,8 +188,7 @@ pub fn choose_h(
             factor: None,
         });
     }
-    let stats = spacing_statistics(points, DEFAULT_SPACING_NEIGHBOURS, par)
-        .with_context(|| format!("{file}: cannot measure the point spacing"))?;
+    let stats = stats().with_context(|| format!("{file}: cannot measure the point spacing"))?;
     let h = suggest_h(&stats, factor)
         .with_context(|| format!("{file}: cannot derive h from the spacing"))?;
     Ok(Scale {

@@ -121,11 +121,22 @@ pub fn spacing_statistics(
     }
     check_points(points)?;
     let centre = bounding_box_centre(points);
+    let coords: Vec<[f64; 3]> = points.iter().map(|p| (p.coords - centre).into()).collect();
+    spacing_of_local(coords, k, par)
+}
+
+/// [`spacing_statistics`] of points already relative to their bounding-box centre (and
+/// checked), on a tree of their distinct positions. `k` ≥ 1.
+pub(crate) fn spacing_of_local(
+    mut coords: Vec<[f64; 3]>,
+    k: usize,
+    par: Parallelism,
+) -> Result<SpacingStats, NormalsError> {
+    let total = coords.len();
     // `+ 0.0` turns −0.0 into 0.0 so that the bitwise-total order below sees one zero.
-    let mut coords: Vec<[f64; 3]> = points
-        .iter()
-        .map(|p| (p.coords - centre).map(|c| c + 0.0).into())
-        .collect();
+    for c in &mut coords {
+        *c = c.map(|c| c + 0.0);
+    }
     let lexicographic = |a: &[f64; 3], b: &[f64; 3]| {
         a[0].total_cmp(&b[0])
             .then(a[1].total_cmp(&b[1]))
@@ -139,36 +150,58 @@ pub fn spacing_statistics(
     }
     let k_eff = k.min(distinct - 1);
     let tree = ImmutableKdTree::<f64, 3>::new_from_slice(&coords)
-        .map_err(|_| InputError::TooManyPoints(points.len()))?;
-    let rho = square_grid_rms_distance(k_eff);
-    let per_point = |i: usize| local_distances(&tree, &coords, i, k_eff, rho);
-    let rows: Vec<[f64; 3]> = par.map(distinct, 256, per_point);
+        .map_err(|_| InputError::TooManyPoints(total))?;
+    let stats = spacing_on_tree(&tree, &coords, k_eff, par, false)
+        .expect("distinct positions have no duplicates to report");
+    Ok(SpacingStats {
+        duplicates: total - distinct,
+        ..stats
+    })
+}
+
+/// The statistics over every point of `coords` (indexed by `tree`) with `k` neighbours each,
+/// `k < coords.len()`. With `detect_duplicates`, `None` as soon as a point has another at
+/// distance 0 (the statistics are over distinct positions: the caller removes duplicates
+/// first).
+pub(crate) fn spacing_on_tree(
+    tree: &ImmutableKdTree<f64, 3>,
+    coords: &[[f64; 3]],
+    k: usize,
+    par: Parallelism,
+    detect_duplicates: bool,
+) -> Option<SpacingStats> {
+    let rho = square_grid_rms_distance(k);
+    let per_point = |i: usize| local_distances(tree, coords, i, k, rho, detect_duplicates);
+    let rows: Vec<Option<[f64; 3]>> = par.map(coords.len(), 256, per_point);
+    let rows: Vec<[f64; 3]> = rows.into_iter().collect::<Option<_>>()?;
     let column = |c: usize| {
         let mut v: Vec<f64> = rows.iter().map(|r| r[c]).collect();
         DistanceStats::of(&mut v, par)
     };
     let (nearest, kth, local_spacing) = (column(0), column(1), column(2));
-    Ok(SpacingStats {
+    Some(SpacingStats {
         spacing: local_spacing.median,
-        k: k_eff,
-        distinct,
-        duplicates: points.len() - distinct,
+        k,
+        distinct: coords.len(),
+        duplicates: 0,
         nearest,
         kth,
         local_spacing,
     })
 }
 
-/// Nearest distance, k-th distance and calibrated local spacing of distinct position `i`.
+/// Nearest distance, k-th distance and calibrated local spacing of position `i`; `None` when
+/// `detect_duplicates` and another position coincides with it.
 fn local_distances(
     tree: &ImmutableKdTree<f64, 3>,
     coords: &[[f64; 3]],
     i: usize,
     k: usize,
     rho: f64,
-) -> [f64; 3] {
+    detect_duplicates: bool,
+) -> Option<[f64; 3]> {
     let Some(wanted) = NonZeroUsize::new(k + 1) else {
-        return [f64::NAN; 3];
+        return Some([f64::NAN; 3]);
     };
     let hits = tree
         .query(&coords[i])
@@ -181,11 +214,14 @@ fn local_distances(
         .take(k)
         .map(|h| h.distance)
         .collect();
+    if detect_duplicates && d2.first().is_some_and(|&d| d == 0.0) {
+        return None;
+    }
     let (Some(&first), Some(&last)) = (d2.first(), d2.last()) else {
-        return [f64::NAN; 3];
+        return Some([f64::NAN; 3]);
     };
     let mean_d2 = d2.iter().sum::<f64>() / d2.len() as f64;
-    [first.sqrt(), last.sqrt(), mean_d2.sqrt() / rho]
+    Some([first.sqrt(), last.sqrt(), mean_d2.sqrt() / rho])
 }
 
 /// The root mean square distance from a node of the square grid of unit pitch to its `k`

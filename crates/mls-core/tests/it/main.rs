@@ -3,6 +3,7 @@
 mod adaptive;
 mod adversarial;
 mod buildings;
+mod cloud;
 mod clouds;
 mod invariance;
 mod jet;
