@@ -5,6 +5,7 @@ use std::path::PathBuf;
 use mls_shapes::{SurfacePoint, Torus, fibonacci_sphere, normals, points, random};
 
 use super::*;
+use crate::colour::RDBU;
 
 const TORUS_SEED: u64 = 11;
 
