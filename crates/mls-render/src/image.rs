@@ -9,9 +9,10 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 
 use crate::colour::percentile;
+use crate::splat::{Rect, Splats};
 use crate::text::{Backend, FONT_BYTES, plotting_error, register_font};
 use crate::view::{Camera, Fit};
-use crate::{BACKGROUND, ColourScale, NO_VALUE, Rect, Rgb, Splats, View};
+use crate::{BACKGROUND, ColourScale, NO_VALUE, Rgb, View};
 
 /// An RGB image in memory, 8 bits a channel, rows from the top: the splats are drawn into it
 /// directly, text through plotters.

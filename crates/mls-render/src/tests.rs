@@ -6,6 +6,7 @@ use mls_shapes::{SurfacePoint, Torus, fibonacci_sphere, normals, points, random}
 
 use super::*;
 use crate::colour::RDBU;
+use crate::splat::{LEGEND_BAND, PANEL_TITLE_BAND, TITLE_BAND, Ticks};
 use crate::view::{Camera, dot};
 
 const TORUS_SEED: u64 = 11;

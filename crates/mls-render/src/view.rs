@@ -1,6 +1,6 @@
 //! Views: the camera a [`View`] describes, and the fit of a projected cloud into a rectangle.
 
-use crate::{Rect, SPLAT_RADIUS};
+use crate::splat::{Rect, SPLAT_RADIUS};
 
 /// A fixed orthographic camera: the direction it looks from, as angles around the `up` axis.
 #[derive(Clone, Copy, Debug, PartialEq)]
