@@ -84,7 +84,7 @@ pub(crate) struct PanelRef<'a> {
     pub(crate) legend: LegendRef<'a>,
 }
 
-/// A [`Legend`] borrowed.
+/// A [`Legend`](crate::Legend) borrowed.
 #[derive(Clone, Copy)]
 pub(crate) enum LegendRef<'a> {
     Bar(&'a ColourScale),

@@ -1,5 +1,7 @@
 //! Views: the camera a [`View`] describes, and the fit of a projected cloud into a rectangle.
 
+use anyhow::Result;
+
 use crate::splat::{Rect, SPLAT_RADIUS};
 
 /// A fixed orthographic camera: the direction it looks from, as angles around the `up` axis.
