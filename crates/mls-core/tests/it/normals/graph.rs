@@ -1,0 +1,59 @@
+//! The neighbour graph against brute force.
+
+use mls_core::Point;
+use mls_core::normals::NeighbourGraph;
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+use super::{CLOUD_SEED, PAR, SEQ};
+
+#[test]
+fn neighbour_graph_matches_brute_force() {
+    let mut rng = ChaCha8Rng::seed_from_u64(CLOUD_SEED);
+    let mut points: Vec<Point> = (0..600)
+        .map(|_| {
+            Point::new(
+                rng.random_range(-1.0..1.0),
+                rng.random_range(-1.0..1.0),
+                rng.random_range(-0.2..0.2),
+            )
+        })
+        .collect();
+    // Some exact duplicates, including more copies of one position than k.
+    points.extend(std::iter::repeat_n(points[3], 15));
+    points.extend_from_within(100..110);
+    let k = 10;
+    let graph = NeighbourGraph::build(&points, k, PAR).unwrap();
+    assert_eq!(graph, NeighbourGraph::build(&points, k, SEQ).unwrap());
+    assert_eq!((graph.len(), graph.k()), (points.len(), k));
+    assert_eq!(graph.as_flat().len(), points.len() * k);
+    for (i, p) in points.iter().enumerate() {
+        let found: Vec<f64> = graph
+            .neighbours(i)
+            .iter()
+            .map(|&j| {
+                assert_ne!(j as usize, i, "point {i} lists itself");
+                (points[j as usize] - p).norm_squared()
+            })
+            .collect();
+        let mut brute: Vec<f64> = points
+            .iter()
+            .enumerate()
+            .filter(|&(j, _)| j != i)
+            .map(|(_, q)| (q - p).norm_squared())
+            .collect();
+        brute.sort_by(f64::total_cmp);
+        assert_eq!(found, brute[..k], "point {i}");
+    }
+    // Fewer points than k + 1: every other point.
+    let few = &points[..5];
+    let small = NeighbourGraph::build(few, 16, SEQ).unwrap();
+    assert_eq!(small.k(), 4);
+    for i in 0..5 {
+        let mut nb: Vec<u32> = small.neighbours(i).to_vec();
+        nb.sort_unstable();
+        let all: Vec<u32> = (0..5).filter(|&j| j != i as u32).collect();
+        assert_eq!(nb, all);
+    }
+    assert!(small.neighbours(99).is_empty());
+}

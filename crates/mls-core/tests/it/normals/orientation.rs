@@ -1,0 +1,201 @@
+//! Orientation: outward on closed surfaces and flat components, towards one viewpoint or one
+//! per point, and the consistency measure.
+
+use mls_core::normals::{
+    NeighbourGraph, NormalsConfig, NormalsError, Orientation, estimate_normals, orient_normals,
+    orient_normals_towards, orientation_consistency,
+};
+use mls_core::{Point, Vector};
+use nalgebra::Rotation3;
+
+use super::{
+    FLIP_SEED, PAR, SEQ, angle_deg, fibonacci_sphere, flip_randomly, square_grid, torus,
+    unoriented, unwrap_normals,
+};
+
+#[test]
+fn orientation_recovers_outward_normals_from_random_flips() {
+    let centre = Point::new(-2.0, 0.5, 0.0);
+    let points = fibonacci_sphere(3000, centre, 0.8);
+    let mut est = estimate_normals(&points, &unoriented(12), PAR)
+        .unwrap()
+        .estimates;
+    flip_randomly(&mut est, FLIP_SEED);
+    let graph = NeighbourGraph::build(&points, 12, PAR).unwrap();
+    let inward = points
+        .iter()
+        .zip(&unwrap_normals(&est))
+        .filter(|(p, n)| n.dot(&(*p - centre)) < 0.0)
+        .count();
+    assert!(
+        inward > 1000,
+        "the flips should leave many normals inward ({inward})"
+    );
+    let mut seq = est.clone();
+    let report = orient_normals(&points, &graph, &mut est, Orientation::Outward, PAR).unwrap();
+    let report_seq = orient_normals(&points, &graph, &mut seq, Orientation::Outward, SEQ).unwrap();
+    assert_eq!(est, seq, "orientation must not depend on parallelism");
+    assert_eq!(report, report_seq);
+    assert_eq!(report.flipped, inward);
+    assert_eq!(report.consistency, Some(1.0));
+    for (p, n) in points.iter().zip(unwrap_normals(&est)) {
+        assert!(n.dot(&(p - centre)) > 0.0, "inward normal at {p}");
+    }
+}
+
+#[test]
+fn torus_is_oriented_outward_with_full_consistency() {
+    let (points, tube_centres) = torus(160, 48, 1.0, 0.3);
+    let mut est = estimate_normals(&points, &unoriented(16), PAR)
+        .unwrap()
+        .estimates;
+    flip_randomly(&mut est, FLIP_SEED);
+    let graph = NeighbourGraph::build(&points, 16, PAR).unwrap();
+    let report = orient_normals(&points, &graph, &mut est, Orientation::Outward, PAR).unwrap();
+    assert_eq!(report.components, 1);
+    assert_eq!(report.consistency, Some(1.0));
+    let normals = unwrap_normals(&est);
+    let mut worst: f64 = 0.0;
+    for ((p, c), n) in points.iter().zip(&tube_centres).zip(&normals) {
+        let radial = p - c;
+        assert!(n.dot(&radial) > 0.0, "inward normal at {p}");
+        worst = worst.max(angle_deg(n, &radial));
+    }
+    // The parameter grid is anisotropic on the inner side; the normals stay close anyway.
+    assert!(worst < 3.0, "worst angle to the tube radial {worst}°");
+}
+
+#[test]
+fn two_disjoint_spheres_are_two_outward_components() {
+    let (c1, c2) = (Point::new(0.0, 0.0, 0.0), Point::new(4.0, 1.0, 0.0));
+    let mut points = fibonacci_sphere(2000, c1, 1.0);
+    let first = points.len();
+    points.extend(fibonacci_sphere(1000, c2, 0.5));
+    let out = estimate_normals(&points, &NormalsConfig::default(), PAR).unwrap();
+    assert_eq!(out.report.components, 2);
+    assert_eq!(out.report.consistency, Some(1.0));
+    for (i, (p, n)) in points
+        .iter()
+        .zip(unwrap_normals(&out.estimates))
+        .enumerate()
+    {
+        let c = if i < first { c1 } else { c2 };
+        assert!(n.dot(&(p - c)) > 0.0, "inward normal at point {i}");
+    }
+}
+
+#[test]
+fn viewpoint_orients_a_plane_towards_the_viewer() {
+    let points = square_grid(40, 40, 0.05);
+    let graph = NeighbourGraph::build(&points, 16, PAR).unwrap();
+    let base = estimate_normals(&points, &unoriented(16), PAR)
+        .unwrap()
+        .estimates;
+    for (eye, sign) in [
+        (Point::new(0.0, 0.0, 10.0), 1.0),
+        (Point::new(0.3, -0.2, -10.0), -1.0),
+    ] {
+        let mut est = base.clone();
+        flip_randomly(&mut est, FLIP_SEED);
+        let report =
+            orient_normals(&points, &graph, &mut est, Orientation::Viewpoint(eye), PAR).unwrap();
+        assert_eq!(report.components, 1);
+        for n in unwrap_normals(&est) {
+            assert!(n.z * sign > 1.0 - 1e-12, "normal {n} seen from {eye}");
+        }
+    }
+    // Through the convenience entry point as well.
+    let config = NormalsConfig {
+        orientation: Orientation::Viewpoint(Point::new(5.0, 5.0, -1.0)),
+        ..NormalsConfig::default()
+    };
+    let out = estimate_normals(&points, &config, SEQ).unwrap();
+    assert!(
+        unwrap_normals(&out.estimates)
+            .iter()
+            .all(|n| n.z < -0.999_999)
+    );
+}
+
+#[test]
+fn per_point_viewpoints_orient_each_scan_towards_its_own_scanner() {
+    // Two patches of the plane z = 0, ten apart: the first scanned from above, the second
+    // from below. No single viewpoint gives both signs; one per point does.
+    let first = square_grid(40, 40, 0.05);
+    let second: Vec<Point> = first
+        .iter()
+        .map(|p| p + Vector::new(10.0, 0.0, 0.0))
+        .collect();
+    let points: Vec<Point> = first.iter().chain(&second).copied().collect();
+    let (above, below) = (Point::new(0.3, 0.0, 10.0), Point::new(10.0, -0.2, -10.0));
+    let viewpoints: Vec<Point> = (0..points.len())
+        .map(|i| if i < first.len() { above } else { below })
+        .collect();
+    let graph = NeighbourGraph::build(&points, 16, PAR).unwrap();
+    let mut est = estimate_normals(&points, &unoriented(16), PAR)
+        .unwrap()
+        .estimates;
+    flip_randomly(&mut est, FLIP_SEED);
+    let report = orient_normals_towards(&points, &graph, &mut est, &viewpoints, PAR).unwrap();
+    assert_eq!(report.components, 2);
+    let facing = report.facing.unwrap();
+    assert_eq!(facing.facing, points.len());
+    for (i, n) in unwrap_normals(&est).iter().enumerate() {
+        let sign = if i < first.len() { 1.0 } else { -1.0 };
+        assert!(n.z * sign > 1.0 - 1e-12, "normal {n} at point {i}");
+    }
+    // One viewpoint per point, each finite.
+    assert!(matches!(
+        orient_normals_towards(&points, &graph, &mut est, &viewpoints[1..], PAR),
+        Err(NormalsError::LengthMismatch { .. })
+    ));
+    let mut bad = viewpoints.clone();
+    bad[7] = Point::new(0.0, f64::INFINITY, 0.0);
+    assert_eq!(
+        orient_normals_towards(&points, &graph, &mut est, &bad, PAR),
+        Err(NormalsError::InvalidViewpoint)
+    );
+}
+
+#[test]
+fn outward_on_a_flat_component_is_deterministic() {
+    // A plane has no outside: the seed's largest normal component is made positive.
+    let tilt = Vector::new(1.0, 2.0, -3.0).normalize();
+    let rot = Rotation3::rotation_between(&Vector::z(), &tilt).unwrap();
+    let points: Vec<Point> = square_grid(30, 30, 0.1)
+        .iter()
+        .map(|p| rot * p + Vector::new(5.0, 0.0, 1.0))
+        .collect();
+    let out = estimate_normals(&points, &NormalsConfig::default(), PAR).unwrap();
+    assert_eq!(out.report.consistency, Some(1.0));
+    for n in unwrap_normals(&out.estimates) {
+        assert!(angle_deg(&n, &-tilt) < 1e-6, "normal {n}");
+    }
+}
+
+#[test]
+fn consistency_detects_flips_and_matches_the_report() {
+    let points = fibonacci_sphere(2000, Point::origin(), 1.0);
+    let out = estimate_normals(&points, &NormalsConfig::default(), PAR).unwrap();
+    let mut normals: Vec<Vector> = unwrap_normals(&out.estimates);
+    let c = orientation_consistency(&out.graph, &normals, PAR).unwrap();
+    assert_eq!(c, out.report.consistency);
+    assert_eq!(c, Some(1.0));
+    for n in normals.iter_mut().step_by(2) {
+        *n = -*n;
+    }
+    let c = orientation_consistency(&out.graph, &normals, SEQ)
+        .unwrap()
+        .unwrap();
+    assert!(c < 0.7, "half flipped, consistency {c}");
+    // Zero normals (missing) are ignored, non-unit ones are fine.
+    let scaled: Vec<Vector> = unwrap_normals(&out.estimates)
+        .iter()
+        .enumerate()
+        .map(|(i, n)| if i % 3 == 0 { Vector::zeros() } else { n * 7.0 })
+        .collect();
+    assert_eq!(
+        orientation_consistency(&out.graph, &scaled, PAR).unwrap(),
+        Some(1.0)
+    );
+}

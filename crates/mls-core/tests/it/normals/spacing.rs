@@ -1,0 +1,65 @@
+//! Spacing statistics and the grid calibration of h.
+
+use std::f64::consts::PI;
+
+use mls_core::normals::{
+    DEFAULT_H_FACTOR, DEFAULT_SPACING_NEIGHBOURS, spacing_statistics, square_grid_rms_distance,
+    suggest_h,
+};
+use mls_core::{Point, Vector};
+use nalgebra::Rotation3;
+
+use super::{PAR, SEQ, fibonacci_sphere, square_grid};
+
+#[test]
+fn square_grid_rms_distance_has_known_values() {
+    assert_eq!(square_grid_rms_distance(1), 1.0);
+    assert_eq!(square_grid_rms_distance(4), 1.0);
+    assert!((square_grid_rms_distance(8) - 1.5_f64.sqrt()).abs() < 1e-15);
+    assert!((square_grid_rms_distance(12) - (28.0_f64 / 12.0).sqrt()).abs() < 1e-15);
+    // 4 at 1, 4 at √2, 4 at 2, 8 at √5.
+    assert!((square_grid_rms_distance(20) - (68.0_f64 / 20.0).sqrt()).abs() < 1e-15);
+    assert!(square_grid_rms_distance(0).is_nan());
+}
+
+#[test]
+fn spacing_of_a_square_grid_is_its_pitch() {
+    let pitch = 0.37;
+    let rot = Rotation3::from_euler_angles(0.7, 0.2, -0.4);
+    let t = Vector::new(12.0, -5.0, 1e4);
+    let grid: Vec<Point> = square_grid(50, 50, pitch)
+        .iter()
+        .map(|p| rot * p + t)
+        .collect();
+    for k in [4, 6, 8, 12, 16, 24] {
+        let stats = spacing_statistics(&grid, k, PAR).unwrap();
+        assert!(
+            (stats.spacing / pitch - 1.0).abs() < 0.01,
+            "k = {k}: spacing {} for pitch {pitch}",
+            stats.spacing
+        );
+        assert!((stats.nearest.median / pitch - 1.0).abs() < 1e-9);
+        assert_eq!(stats.k, k);
+        assert_eq!(stats.duplicates, 0);
+        assert!(stats.nearest.min <= stats.nearest.p10 && stats.nearest.p90 <= stats.nearest.max);
+    }
+    let stats = spacing_statistics(&grid, 8, SEQ).unwrap();
+    assert_eq!(stats, spacing_statistics(&grid, 8, PAR).unwrap());
+    let h = suggest_h(&stats, DEFAULT_H_FACTOR).unwrap();
+    assert!((h - DEFAULT_H_FACTOR * stats.spacing).abs() < 1e-15);
+}
+
+#[test]
+fn spacing_of_a_fibonacci_sphere_is_the_root_of_area_per_point() {
+    for (n, radius) in [(5000, 2.0), (800, 0.01)] {
+        let points = fibonacci_sphere(n, Point::new(3.0, 3.0, 3.0), radius);
+        let stats = spacing_statistics(&points, DEFAULT_SPACING_NEIGHBOURS, PAR).unwrap();
+        let expected = (4.0 * PI * radius * radius / n as f64).sqrt();
+        let rel = stats.spacing / expected - 1.0;
+        assert!(
+            rel.abs() < 0.1,
+            "N = {n}: spacing {} vs {expected}",
+            stats.spacing
+        );
+    }
+}
