@@ -7,7 +7,7 @@ use anyhow::Result;
 use mls_cli::evaluate::{self, vector_columns};
 use mls_cli::pipeline::{self, Built, Carried, Prepared, Timings};
 use mls_cli::{At, CurvatureOptions, Method};
-use mls_core::{AdaptiveConfig, Parallelism, Point};
+use mls_core::{AdaptiveConfig, Frame, Parallelism, Point};
 use mls_io::Column;
 
 use crate::{CurvatureArgs, EvalArgs, NormalsArgs, OutputArgs, ProjectArgs, interactive};
@@ -380,14 +380,18 @@ pub fn normals(a: NormalsArgs) -> Result<()> {
         let points = pipeline::to_points(&cloud);
         let viewpoints = pipeline::scan_viewpoints(&cloud);
         let name = pipeline::input_name(&a.input);
+        let index = t.time("index", || {
+            pipeline::index(&points, Frame::of(&points), &name)
+        })?;
         let scale = t.time("spacing", || {
-            pipeline::choose_h(&points, a.scale.h, a.scale.h_factor, par, &name)
+            pipeline::choose_h_on(&index, a.scale.h, a.scale.h_factor, par, &name)
         })?;
         let est = t.time("normals", || {
             // Estimated whatever the file holds: its normals are not passed.
             pipeline::normals(
                 None,
                 &points,
+                Some(&index),
                 mls_cli::NormalsMode::Estimate,
                 a.orient,
                 viewpoints.as_deref(),

@@ -183,7 +183,7 @@ impl AdaptiveSurface {
 
     /// The surfaces of the ladder over an indexed cloud with its `normals` (in input order).
     pub fn from_cloud(
-        cloud: IndexedCloud,
+        cloud: IndexedCloud<'_>,
         normals: &[Vector],
         config: &AdaptiveConfig,
     ) -> Result<Self, ConfigError> {

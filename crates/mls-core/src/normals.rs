@@ -38,6 +38,7 @@ pub use spacing::{
 };
 pub(crate) use spacing::{spacing_of_local, spacing_on_tree};
 
+use crate::cloud::IndexedCloud;
 use crate::error::InputError;
 use crate::math::{Point, Vector};
 use crate::status::PointStatus;
@@ -168,11 +169,36 @@ pub fn estimate_normals(
         check_scale(h)?;
     }
     check_tolerance(config.degeneracy_tolerance)?;
-    // Building the graph validates k and the points before the spacing does any work.
-    let graph = NeighbourGraph::build(points, config.k, par)?;
+    if config.k == 0 {
+        return Err(InputError::InvalidNeighbourCount { min: 1, got: 0 }.into());
+    }
+    estimate_normals_on(&IndexedCloud::new(points, par)?, points, config, par)
+}
+
+/// [`estimate_normals`] of `points` indexed as `cloud` (its tree serves the neighbour graph
+/// and the spacing).
+pub fn estimate_normals_on(
+    cloud: &IndexedCloud<'_>,
+    points: &[Point],
+    config: &NormalsConfig,
+    par: Parallelism,
+) -> Result<EstimatedNormals, NormalsError> {
+    if let Some(h) = config.h {
+        check_scale(h)?;
+    }
+    check_tolerance(config.degeneracy_tolerance)?;
+    if cloud.len() != points.len() {
+        return Err(NormalsError::LengthMismatch {
+            points: points.len(),
+            other: cloud.len(),
+            what: "indexed points",
+        });
+    }
+    // Building the graph validates k before the spacing does any work.
+    let graph = NeighbourGraph::build_on(cloud, config.k, par)?;
     let (h, spacing) = match config.h {
         Some(h) => (Some(h), None),
-        None => match spacing_statistics(points, DEFAULT_SPACING_NEIGHBOURS, par) {
+        None => match cloud.spacing_statistics(DEFAULT_SPACING_NEIGHBOURS, par) {
             Ok(stats) => (Some(suggest_h(&stats, DEFAULT_H_FACTOR)?), Some(stats)),
             // Fewer than two distinct positions: no covariance can have rank 2 either, so
             // every point fails below without needing a scale.

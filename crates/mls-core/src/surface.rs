@@ -136,7 +136,7 @@ impl MlsSurface {
     /// surface's, so nothing is sorted or indexed again. Bitwise [`Self::with_frame`] of the
     /// same points in the cloud's frame.
     pub fn from_cloud(
-        cloud: IndexedCloud,
+        cloud: IndexedCloud<'_>,
         normals: &[Vector],
         config: MlsConfig,
     ) -> Result<Self, ConfigError> {
@@ -148,27 +148,21 @@ impl MlsSurface {
             });
         }
         check_normals(normals)?;
-        let IndexedCloud {
-            frame,
-            order,
-            local,
-            tree,
-        } = cloud;
+        let local = |s: usize| cloud.local(s);
         // Neighbours of a query are then mostly adjacent in memory, whatever the input order
         // (scan order, or a Fibonacci spiral whose neighbours are thousands of indices apart).
-        let samples: Vec<Sample> = Parallelism::Rayon.map(order.len(), 4096, |s| {
-            let normal = UnitNormal::new(normals[order[s] as usize]).expect("checked above");
+        let samples: Vec<Sample> = Parallelism::Rayon.map(cloud.len(), 4096, |s| {
+            let normal = UnitNormal::new(normals[cloud.order[s] as usize]).expect("checked above");
             Sample {
-                point: Point::from(local[s]),
+                point: Point::from(local(s)),
                 normal: normal.into_inner(),
             }
         });
-        drop(local);
         Ok(Self {
             index: Arc::new(SampleIndex {
-                origin: frame.origin,
+                origin: cloud.frame.origin,
                 samples,
-                tree,
+                tree: cloud.tree,
             }),
             kernel,
             config,

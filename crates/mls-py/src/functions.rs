@@ -215,13 +215,17 @@ pub(crate) fn normals<'py>(
             pipeline::with_threads(threads, || {
                 let mut t = Timings::default();
                 let par = Parallelism::Rayon;
+                let index = t.time("index", || {
+                    pipeline::index(points, mls_core::Frame::of(points), POINTS)
+                })?;
                 let scale = t.time("spacing", || {
-                    pipeline::choose_h(points, h, h_factor, par, POINTS)
+                    pipeline::choose_h_on(&index, h, h_factor, par, POINTS)
                 })?;
                 let est = t.time("normals", || {
                     pipeline::normals(
                         None,
                         points,
+                        Some(&index),
                         NormalsMode::Estimate,
                         Some(orient),
                         None,

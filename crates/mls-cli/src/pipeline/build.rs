@@ -77,7 +77,7 @@ pub enum Surface {
 
 /// Builds one fixed-scale surface over `cloud` with its `normals`.
 pub fn fixed_surface(
-    cloud: IndexedCloud,
+    cloud: IndexedCloud<'_>,
     normals: &[Vector],
     h: f64,
     cutoff: Cutoff,
@@ -93,7 +93,7 @@ pub fn fixed_surface(
 }
 
 /// `points` checked and indexed in `frame` (see `mls_core::IndexedCloud`).
-pub fn index(points: &[Point], frame: Frame, file: &str) -> Result<IndexedCloud> {
+pub fn index<'a>(points: &'a [Point], frame: Frame, file: &str) -> Result<IndexedCloud<'a>> {
     IndexedCloud::with_frame(points, frame, Parallelism::Rayon)
         .map_err(ConfigError::from)
         .with_context(|| file.to_owned())
@@ -102,11 +102,11 @@ pub fn index(points: &[Point], frame: Frame, file: &str) -> Result<IndexedCloud>
 /// What builds a surface over an indexed cloud and its normals (in input order), with h and
 /// the cutoff: a fixed scale ([`fixed_surface`]) or the adaptive ladder.
 pub trait BuildSurface<S>:
-    FnOnce(IndexedCloud, &[Vector], f64, Cutoff) -> Result<S, ConfigError>
+    for<'a> FnOnce(IndexedCloud<'a>, &[Vector], f64, Cutoff) -> Result<S, ConfigError>
 {
 }
-impl<S, F: FnOnce(IndexedCloud, &[Vector], f64, Cutoff) -> Result<S, ConfigError>> BuildSurface<S>
-    for F
+impl<S, F: for<'a> FnOnce(IndexedCloud<'a>, &[Vector], f64, Cutoff) -> Result<S, ConfigError>>
+    BuildSurface<S> for F
 {
 }
 
@@ -182,6 +182,7 @@ pub fn build_surface<S>(
         normals(
             file_normals,
             points,
+            Some(&cloud),
             s.normals,
             s.orient,
             viewpoints,
@@ -207,7 +208,7 @@ pub fn build_surface<S>(
 /// points lack a normal. `cloud` is `points` indexed in their frame: it becomes the surface's
 /// index when every point has a normal.
 pub fn surface<S>(
-    cloud: IndexedCloud,
+    cloud: IndexedCloud<'_>,
     points: &[Point],
     normals: Vec<Option<Vector>>,
     h: f64,

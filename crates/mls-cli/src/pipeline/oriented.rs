@@ -4,9 +4,10 @@
 
 use anyhow::{Context, Result, bail};
 use mls_core::normals::{
-    DEFAULT_NEIGHBOURS, NormalsConfig, Orientation, estimate_normals, orient_normals_towards,
+    DEFAULT_NEIGHBOURS, NormalsConfig, Orientation, estimate_normals, estimate_normals_on,
+    orient_normals_towards,
 };
-use mls_core::{Parallelism, Point, Vector};
+use mls_core::{IndexedCloud, Parallelism, Point, Vector};
 use mls_io::PointCloud;
 
 use crate::NormalsMode;
@@ -30,11 +31,13 @@ pub fn scan_viewpoints(cloud: &PointCloud) -> Option<Vec<Point>> {
 /// Normals from `file_normals` (the file's, consumed here so that they are not held beside
 /// the converted ones) or estimated from `points`, as `mode` says, and oriented as
 /// `orientation` says; without one (the default), towards `viewpoints` (one per point: each
-/// point's own scanner, [`scan_viewpoints`]) if given, else outward.
+/// point's own scanner, [`scan_viewpoints`]) if given, else outward. `cloud`, `points`
+/// indexed, serves the estimation's neighbour search when given.
 #[allow(clippy::too_many_arguments)]
 pub fn normals(
     file_normals: Option<Vec<[f64; 3]>>,
     points: &[Point],
+    cloud: Option<&IndexedCloud<'_>>,
     mode: NormalsMode,
     orientation: Option<Orientation>,
     viewpoints: Option<&[Point]>,
@@ -86,8 +89,11 @@ pub fn normals(
         },
         ..NormalsConfig::default()
     };
-    let mut est = estimate_normals(points, &config, par)
-        .with_context(|| format!("{file}: normal estimation"))?;
+    let mut est = match cloud {
+        Some(cloud) => estimate_normals_on(cloud, points, &config, par),
+        None => estimate_normals(points, &config, par),
+    }
+    .with_context(|| format!("{file}: normal estimation"))?;
     if let Some(viewpoints) = per_scan {
         est.report =
             orient_normals_towards(points, &est.graph, &mut est.estimates, viewpoints, par)

@@ -162,7 +162,7 @@ pub fn choose_h(
 
 /// [`choose_h`] on an indexed cloud (the same h, without another tree).
 pub fn choose_h_on(
-    cloud: &IndexedCloud,
+    cloud: &IndexedCloud<'_>,
     h: Option<f64>,
     factor: f64,
     par: Parallelism,

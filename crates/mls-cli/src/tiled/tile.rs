@@ -67,6 +67,7 @@ pub fn tile_curvature(
     let normals = pipeline::normals(
         file_normals,
         points,
+        None,
         if from_file {
             NormalsMode::File
         } else {

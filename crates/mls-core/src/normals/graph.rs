@@ -3,9 +3,11 @@
 use std::num::NonZeroUsize;
 
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
+
 use rayon::prelude::*;
 
-use super::{NormalsError, bounding_box_centre, check_points};
+use super::NormalsError;
+use crate::cloud::IndexedCloud;
 use crate::error::InputError;
 use crate::math::Point;
 use crate::surface::Parallelism;
@@ -33,8 +35,19 @@ impl NeighbourGraph {
         if k == 0 {
             return Err(InputError::InvalidNeighbourCount { min: 1, got: 0 }.into());
         }
-        check_points(points)?;
-        let n = points.len();
+        Self::build_on(&IndexedCloud::new(points, par)?, k, par)
+    }
+
+    /// [`Self::build`] on an indexed cloud, with its tree; indices are the input's.
+    pub fn build_on(
+        cloud: &IndexedCloud<'_>,
+        k: usize,
+        par: Parallelism,
+    ) -> Result<Self, NormalsError> {
+        if k == 0 {
+            return Err(InputError::InvalidNeighbourCount { min: 1, got: 0 }.into());
+        }
+        let n = cloud.len();
         let k_eff = k.min(n.saturating_sub(1));
         let mut neighbours = vec![0_u32; n * k_eff];
         if k_eff == 0 {
@@ -44,11 +57,23 @@ impl NeighbourGraph {
                 neighbours,
             });
         }
-        let centre = bounding_box_centre(points);
-        let coords: Vec<[f64; 3]> = points.iter().map(|p| (p.coords - centre).into()).collect();
-        let tree = ImmutableKdTree::<f64, 3>::new_from_slice(&coords)
-            .map_err(|_| InputError::TooManyPoints(n))?;
-        let fill = |(i, row): (usize, &mut [u32])| fill_row(&tree, &coords, i, row);
+        let order = &cloud.order;
+        let mut rank = vec![0_u32; n];
+        for (s, &i) in order.iter().enumerate() {
+            rank[i as usize] = s as u32;
+        }
+        let fill = |(i, row): (usize, &mut [u32])| {
+            fill_row(
+                &cloud.tree,
+                &cloud.local(rank[i] as usize),
+                rank[i] as usize,
+                n,
+                row,
+            );
+            for r in row.iter_mut() {
+                *r = order[*r as usize];
+            }
+        };
         match par {
             Parallelism::Sequential => neighbours.chunks_mut(k_eff).enumerate().for_each(fill),
             Parallelism::Rayon => neighbours
@@ -98,8 +123,9 @@ impl NeighbourGraph {
     }
 }
 
-/// Writes the `row.len()` nearest neighbours of point `i` into `row`.
-fn fill_row(tree: &ImmutableKdTree<f64, 3>, coords: &[[f64; 3]], i: usize, row: &mut [u32]) {
+/// Writes the `row.len()` nearest neighbours of item `i` (at `at`) of a tree of `n` points into
+/// `row`.
+fn fill_row(tree: &ImmutableKdTree<f64, 3>, at: &[f64; 3], i: usize, n: usize, row: &mut [u32]) {
     let k = row.len();
     // One extra result covers the point itself. With more than k+1 copies of one position the
     // point itself may be missing from the result; then the first k are all valid neighbours.
@@ -107,7 +133,7 @@ fn fill_row(tree: &ImmutableKdTree<f64, 3>, coords: &[[f64; 3]], i: usize, row: 
         return;
     };
     let hits = tree
-        .query(&coords[i])
+        .query(at)
         .nearest_n::<SquaredEuclidean<f64>>(wanted)
         .execute();
     let mut filled = 0;
@@ -121,7 +147,7 @@ fn fill_row(tree: &ImmutableKdTree<f64, 3>, coords: &[[f64; 3]], i: usize, row: 
     let last = if filled > 0 {
         row[filled - 1]
     } else {
-        ((i + 1) % coords.len()) as u32
+        ((i + 1) % n) as u32
     };
     row[filled..].fill(last);
 }

@@ -151,7 +151,7 @@ pub(crate) fn spacing_of_local(
     let k_eff = k.min(distinct - 1);
     let tree = ImmutableKdTree::<f64, 3>::new_from_slice(&coords)
         .map_err(|_| InputError::TooManyPoints(total))?;
-    let stats = spacing_on_tree(&tree, &coords, k_eff, par, false)
+    let stats = spacing_on_tree(&tree, coords.len(), |i| coords[i], k_eff, par, false)
         .expect("distinct positions have no duplicates to report");
     Ok(SpacingStats {
         duplicates: total - distinct,
@@ -159,20 +159,20 @@ pub(crate) fn spacing_of_local(
     })
 }
 
-/// The statistics over every point of `coords` (indexed by `tree`) with `k` neighbours each,
-/// `k < coords.len()`. With `detect_duplicates`, `None` as soon as a point has another at
-/// distance 0 (the statistics are over distinct positions: the caller removes duplicates
-/// first).
+/// The statistics over the `n` points of `tree` (item `i` at `coord(i)`) with `k` neighbours
+/// each, `k < n`. With `detect_duplicates`, `None` as soon as a point has another at distance
+/// 0 (the statistics are over distinct positions: the caller removes duplicates first).
 pub(crate) fn spacing_on_tree(
     tree: &ImmutableKdTree<f64, 3>,
-    coords: &[[f64; 3]],
+    n: usize,
+    coord: impl Fn(usize) -> [f64; 3] + Sync + Send,
     k: usize,
     par: Parallelism,
     detect_duplicates: bool,
 ) -> Option<SpacingStats> {
     let rho = square_grid_rms_distance(k);
-    let per_point = |i: usize| local_distances(tree, coords, i, k, rho, detect_duplicates);
-    let rows: Vec<Option<[f64; 3]>> = par.map(coords.len(), 256, per_point);
+    let per_point = |i: usize| local_distances(tree, &coord(i), i, k, rho, detect_duplicates);
+    let rows: Vec<Option<[f64; 3]>> = par.map(n, 256, per_point);
     let rows: Vec<[f64; 3]> = rows.into_iter().collect::<Option<_>>()?;
     let column = |c: usize| {
         let mut v: Vec<f64> = rows.iter().map(|r| r[c]).collect();
@@ -182,7 +182,7 @@ pub(crate) fn spacing_on_tree(
     Some(SpacingStats {
         spacing: local_spacing.median,
         k,
-        distinct: coords.len(),
+        distinct: n,
         duplicates: 0,
         nearest,
         kth,
@@ -190,11 +190,11 @@ pub(crate) fn spacing_on_tree(
     })
 }
 
-/// Nearest distance, k-th distance and calibrated local spacing of position `i`; `None` when
-/// `detect_duplicates` and another position coincides with it.
+/// Nearest distance, k-th distance and calibrated local spacing of position `i` (at `at`);
+/// `None` when `detect_duplicates` and another position coincides with it.
 fn local_distances(
     tree: &ImmutableKdTree<f64, 3>,
-    coords: &[[f64; 3]],
+    at: &[f64; 3],
     i: usize,
     k: usize,
     rho: f64,
@@ -204,7 +204,7 @@ fn local_distances(
         return Some([f64::NAN; 3]);
     };
     let hits = tree
-        .query(&coords[i])
+        .query(at)
         .nearest_n::<SquaredEuclidean<f64>>(wanted)
         .execute();
     // Positions are distinct, so the point itself is the only hit to skip.
