@@ -3,7 +3,6 @@
 use std::num::NonZeroUsize;
 
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
-
 use rayon::prelude::*;
 
 use super::NormalsError;
