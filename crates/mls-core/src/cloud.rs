@@ -117,3 +117,48 @@ impl<'a> IndexedCloud<'a> {
         spacing_of_local((0..n).map(|s| self.local(s)).collect(), k, par)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::math::Vector;
+
+    /// Storage order is a Morton order of the points' own neighbourhoods: consecutive stored
+    /// points are a few spacings apart, where consecutive points of a Fibonacci spiral (and
+    /// of an order computed in the wrong frame, whose keys all clamp to one face of the cube)
+    /// are across the sphere.
+    #[test]
+    fn storage_order_keeps_neighbours_together_far_from_the_origin() {
+        let n = 4_000;
+        let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
+        let offset = Vector::new(1.0e3, -2.0e3, 5.0e2);
+        let points: Vec<Point> = (0..n)
+            .map(|i| {
+                let z = 1.0 - (2 * i + 1) as f64 / n as f64;
+                let r = (1.0 - z * z).sqrt();
+                let t = golden * i as f64;
+                Point::new(r * t.cos(), r * t.sin(), z) + offset
+            })
+            .collect();
+        let spacing = (4.0 * std::f64::consts::PI / n as f64).sqrt();
+        let cloud = IndexedCloud::new(&points, Parallelism::Sequential).unwrap();
+        let mean_step = |order: &[u32]| {
+            let steps = order
+                .windows(2)
+                .map(|w| (points[w[1] as usize] - points[w[0] as usize]).norm());
+            steps.sum::<f64>() / (order.len() - 1) as f64
+        };
+        let input: Vec<u32> = (0..n as u32).collect();
+        assert!(mean_step(&input) > 10.0 * spacing);
+        let stored = mean_step(&cloud.order);
+        assert!(
+            stored < 3.0 * spacing,
+            "mean step {stored}, spacing {spacing}"
+        );
+        // The tree holds the stored points relative to the origin.
+        let s = 1234;
+        let local = cloud.local(s);
+        let p = points[cloud.order[s] as usize];
+        assert!((Point::from(local) + cloud.frame().origin - p).norm() < 1e-9);
+    }
+}
