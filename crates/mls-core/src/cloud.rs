@@ -155,6 +155,9 @@ mod tests {
             stored < 3.0 * spacing,
             "mean step {stored}, spacing {spacing}"
         );
+        assert_eq!((cloud.len(), cloud.is_empty()), (n, false));
+        let empty = IndexedCloud::new(&[], Parallelism::Sequential).unwrap();
+        assert_eq!((empty.len(), empty.is_empty()), (0, true));
         // The tree holds the stored points relative to the origin.
         let s = 1234;
         let local = cloud.local(s);
