@@ -38,6 +38,15 @@ fn spacing_on_the_index_is_the_spacing_of_the_points() {
         spacing_statistics(&points, 12, Parallelism::Rayon).unwrap()
     );
     assert!(cloud.spacing_statistics(0, Parallelism::Rayon).is_err());
+    // More neighbours asked for than the cloud has: both clamp k to the others' count.
+    let few = &points[..5];
+    let cloud = IndexedCloud::new(few, Parallelism::Rayon).unwrap();
+    let stats = cloud.spacing_statistics(12, Parallelism::Rayon).unwrap();
+    assert_eq!(stats.k, 4);
+    assert_eq!(
+        stats,
+        spacing_statistics(few, 12, Parallelism::Rayon).unwrap()
+    );
     let one = IndexedCloud::new(&points[..1], Parallelism::Rayon).unwrap();
     assert_eq!(
         one.spacing_statistics(12, Parallelism::Rayon),
