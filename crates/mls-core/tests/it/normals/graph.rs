@@ -26,6 +26,8 @@ fn neighbour_graph_matches_brute_force() {
     let graph = NeighbourGraph::build(&points, k, PAR).unwrap();
     assert_eq!(graph, NeighbourGraph::build(&points, k, SEQ).unwrap());
     assert_eq!((graph.len(), graph.k()), (points.len(), k));
+    assert!(!graph.is_empty());
+    assert!(NeighbourGraph::build(&[], k, SEQ).unwrap().is_empty());
     assert_eq!(graph.as_flat().len(), points.len() * k);
     for (i, p) in points.iter().enumerate() {
         let found: Vec<f64> = graph
