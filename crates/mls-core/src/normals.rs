@@ -165,6 +165,13 @@ pub fn estimate_normals(
     config: &NormalsConfig,
     par: Parallelism,
 ) -> Result<EstimatedNormals, NormalsError> {
+    // The parameters are checked before the points, as the points are the costlier check.
+    check_config(config)?;
+    estimate_normals_on(&IndexedCloud::new(points, par)?, points, config, par)
+}
+
+/// Checks h (when given), the degeneracy tolerance and k.
+fn check_config(config: &NormalsConfig) -> Result<(), NormalsError> {
     if let Some(h) = config.h {
         check_scale(h)?;
     }
@@ -172,7 +179,7 @@ pub fn estimate_normals(
     if config.k == 0 {
         return Err(InputError::InvalidNeighbourCount { min: 1, got: 0 }.into());
     }
-    estimate_normals_on(&IndexedCloud::new(points, par)?, points, config, par)
+    Ok(())
 }
 
 /// [`estimate_normals`] of `points` indexed as `cloud` (its tree serves the neighbour graph
@@ -183,10 +190,7 @@ pub fn estimate_normals_on(
     config: &NormalsConfig,
     par: Parallelism,
 ) -> Result<EstimatedNormals, NormalsError> {
-    if let Some(h) = config.h {
-        check_scale(h)?;
-    }
-    check_tolerance(config.degeneracy_tolerance)?;
+    check_config(config)?;
     if cloud.len() != points.len() {
         return Err(NormalsError::LengthMismatch {
             points: points.len(),
@@ -194,7 +198,6 @@ pub fn estimate_normals_on(
             what: "indexed points",
         });
     }
-    // Building the graph validates k before the spacing does any work.
     let graph = NeighbourGraph::build_on(cloud, config.k, par)?;
     let (h, spacing) = match config.h {
         Some(h) => (Some(h), None),
