@@ -16,7 +16,7 @@ use rayon::prelude::*;
 
 use crate::cloud::IndexedCloud;
 use crate::curvature::Curvature;
-use crate::error::{ConfigError, check_points};
+use crate::error::ConfigError;
 use crate::field::{Implicit, Sample};
 pub use crate::frame::Frame;
 use crate::frame::morton_key;
@@ -125,8 +125,7 @@ impl MlsSurface {
                 normals: normals.len(),
             });
         }
-        check_points(points)?;
-        check_normals(normals)?;
+        // The cloud checks the points and `from_cloud` the normals, in that order.
         let cloud = IndexedCloud::with_frame(points, frame, Parallelism::Rayon)?;
         Self::from_cloud(cloud, normals, config)
     }
