@@ -2,9 +2,9 @@
 
 use std::fmt::Write as _;
 
-use anyhow::Result;
+use anyhow::{Context as _, Result, anyhow};
 use mls_core::normals::{DEFAULT_NEIGHBOURS, NeighbourGraph, orientation_consistency};
-use mls_core::{Parallelism, Vector};
+use mls_core::{IndexedCloud, Parallelism, Vector};
 
 use mls_cli::pipeline;
 
@@ -47,13 +47,24 @@ fn info_report(a: &InfoArgs, out: &mut String) -> Result<()> {
         "size            {:.6} × {:.6} × {:.6}",
         size.x, size.y, size.z
     );
-    match pipeline::choose_h(
-        &points,
-        None,
-        mls_core::normals::DEFAULT_H_FACTOR,
-        Parallelism::Rayon,
-        &pipeline::input_name(&a.input),
-    ) {
+    let name = pipeline::input_name(&a.input);
+    // One tree for the spacing and the normals' neighbour graph, as in the other commands.
+    let indexed = IndexedCloud::new(&points, Parallelism::Rayon)
+        .map_err(anyhow::Error::from)
+        .with_context(|| name.clone());
+    let scale = indexed
+        .as_ref()
+        .map_err(|e| anyhow!("{e:#}"))
+        .and_then(|c| {
+            pipeline::choose_h_on(
+                c,
+                None,
+                mls_core::normals::DEFAULT_H_FACTOR,
+                Parallelism::Rayon,
+                &name,
+            )
+        });
+    match scale {
         Ok(scale) => {
             if let Some(s) = scale.spacing {
                 println!(
@@ -74,7 +85,8 @@ fn info_report(a: &InfoArgs, out: &mut String) -> Result<()> {
                 .iter()
                 .filter(|n| mls_core::UnitNormal::new(**n).is_err())
                 .count();
-            let graph = NeighbourGraph::build(&points, DEFAULT_NEIGHBOURS, Parallelism::Rayon)?;
+            let graph =
+                NeighbourGraph::build_on(&indexed?, DEFAULT_NEIGHBOURS, Parallelism::Rayon)?;
             let consistency = orientation_consistency(&graph, &normals, Parallelism::Rayon)?;
             let verdict = match consistency {
                 Some(c) if c >= 0.99 => format!(
