@@ -103,6 +103,10 @@ mod tests {
         }
         let k = Kernel::new(0.5, Cutoff::Radius(4.0)).unwrap();
         assert_eq!(k.support_radius(), Some(2.0));
+        assert_eq!(k.cutoff(), Cutoff::Radius(4.0));
+        let untruncated = Kernel::new(0.5, Cutoff::None).unwrap();
+        assert_eq!(untruncated.cutoff(), Cutoff::None);
+        assert_eq!(untruncated.support_radius(), None);
         assert!((k.weight(0.25) - (-1.0f64).exp()).abs() < 1e-16);
     }
 }
