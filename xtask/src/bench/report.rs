@@ -123,8 +123,9 @@ pub(super) fn render(
     );
     let _ = writeln!(
         w,
-        "- Settings: mlscurv's defaults (h = 2 × median local spacing, cutoff 5h), rayon's \
-         global pool, release profile (x86-64 baseline target, with the field's per-sample \
+        "- Settings: `--method paper` (the MLS surface, which these targets are for; the \
+         default jet is timed in docs/accuracy.md) with mlscurv's other defaults (h = 2 × \
+         median local spacing, cutoff 5h), rayon's global pool, release profile (x86-64 baseline target, with the field's per-sample \
          loops also compiled for AVX2 and chosen at run time: here {isa}). Each time is the \
          best of {} runs ({} for {}-point clouds). Clouds: the unit Fibonacci sphere, and the \
          torus R = {}, r = {} on a parameter grid (spacing ±30 % between the inner and outer \
@@ -494,7 +495,7 @@ pub(super) fn render(
     for run in &cli.runs {
         let _ = writeln!(
             w,
-            "- `mlscurv curvature IN.ply -o OUT.ply` on {} sphere points ({}): {:.2} s wall \
+            "- `mlscurv curvature IN.ply -o OUT.ply --method paper` on {} sphere points ({}): {:.2} s wall \
              ({} points/s), peak RSS {} (read by {}). Its own stage times (s): {}.",
             thousands(run.points as f64),
             run.label,
