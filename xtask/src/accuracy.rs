@@ -613,9 +613,8 @@ the default.
   23 % slower. The moments summed eight at a time with the sums held in registers while the
   samples stream past (bitwise the same results): 3 % slower on the LiDAR tile. Compiling for the
   host CPU (AVX2, AVX-512, FMA): no measurable change on the sphere, 7 % faster on the LiDAR
-  tile. None is kept;
-  the fit's cost is spread over moments, two factorisations and inverses, and two residual
-  passes, none of which is bound by arithmetic width. A real gain needs less work per point,
+  tile. None is kept: the fit's cost is spread over moments, two factorisations and inverses,
+  and two residual passes, none of which is bound by arithmetic width. A real gain needs less work per point,
   not faster loops: fewer scales or rounds under noise, which changes the estimator and must go
   through this study again.
 
