@@ -150,3 +150,25 @@ fn fill_row(tree: &ImmutableKdTree<f64, 3>, at: &[f64; 3], i: usize, n: usize, r
     };
     row[filled..].fill(last);
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The row's fallback for a tree that returns fewer than k others, which `build_on` never
+    /// asks of it (its tree holds at least k + 1 points): the last neighbour repeated, or the
+    /// next index when there is none.
+    #[test]
+    fn a_short_row_repeats_its_last_neighbour() {
+        let tree =
+            ImmutableKdTree::new_from_slice(&[[0.0, 0.0, 0.0], [5.0, 0.0, 0.0], [1.0, 0.0, 0.0]])
+                .unwrap();
+        let mut row = [u32::MAX; 4];
+        fill_row(&tree, &[5.0, 0.0, 0.0], 1, 3, &mut row);
+        assert_eq!(row, [2, 0, 0, 0]);
+        let alone = ImmutableKdTree::new_from_slice(&[[0.0, 0.0, 0.0]]).unwrap();
+        let mut row = [u32::MAX; 2];
+        fill_row(&alone, &[0.0, 0.0, 0.0], 0, 1, &mut row);
+        assert_eq!(row, [0, 0]);
+    }
+}

@@ -1,7 +1,10 @@
 //! Streaming evaluation: results bitwise independent of the chunk size and of the thread
-//! count, for the paper's curvature, the projection and the jet.
+//! count, for the paper's curvature, the projection, the jet and the adaptive scale.
 
-use mls_core::{JetConfig, MlsConfig, MlsSurface, Parallelism, Point, Vector};
+use mls_core::{
+    AdaptiveConfig, AdaptiveSurface, JetConfig, Location, MlsConfig, MlsSurface, Parallelism,
+    Point, Vector,
+};
 use mls_shapes::Torus;
 
 const CLOUD_SEED: u64 = 23;
@@ -35,6 +38,7 @@ fn collect<R: Clone>(
 ) -> Vec<R> {
     let mut out = Vec::with_capacity(n);
     stream(&mut |range, chunk| {
+        assert!(!range.is_empty(), "an empty chunk at {}", range.start);
         assert_eq!(range.start, out.len());
         assert_eq!(range.len(), chunk.len());
         out.extend_from_slice(chunk);
@@ -155,4 +159,35 @@ fn a_surface_sharing_its_index_equals_one_built_from_scratch() {
         );
     }
     assert!(surface.with_config(MlsConfig::new(-1.0)).is_err());
+}
+
+/// The adaptive ladder's stream equals its whole-set call, at the input points and at the
+/// projections, and a stream of no queries delivers nothing.
+#[test]
+fn adaptive_stream_equals_the_whole_set_call() {
+    let torus = Torus::new(6.0, 2.0);
+    let samples = mls_shapes::random(&torus, 4_000, CLOUD_SEED);
+    let points: Vec<Point> = samples.iter().map(|s| s.surface.point).collect();
+    let normals: Vec<Vector> = samples.iter().map(|s| s.surface.normal).collect();
+    let surface = AdaptiveSurface::new(&points, &normals, &AdaptiveConfig::new(0.7)).unwrap();
+    let par = Parallelism::Rayon;
+    let queries: Vec<Point> = points.iter().step_by(16).copied().collect();
+    let n = queries.len();
+    for at in [Location::Input, Location::Projected] {
+        let whole = surface.curvature_at_points(&queries, at, par);
+        assert!(whole.iter().filter(|r| r.is_ok()).count() > n * 9 / 10);
+        for chunk in [1, 37, n] {
+            let streamed = collect(n, |sink| {
+                surface.curvature_stream(&queries, at, par, chunk, sink)
+            });
+            assert_bitwise(
+                &whole,
+                &streamed,
+                &format!("adaptive {at:?}, chunk {chunk}"),
+            );
+        }
+    }
+    let mut calls = 0;
+    surface.curvature_stream(&[], Location::Input, par, 8, |_, _| calls += 1);
+    assert_eq!(calls, 0, "a stream of no queries called its sink");
 }

@@ -29,6 +29,7 @@ fn neighbour_graph_matches_brute_force() {
     assert!(!graph.is_empty());
     assert!(NeighbourGraph::build(&[], k, SEQ).unwrap().is_empty());
     assert_eq!(graph.as_flat().len(), points.len() * k);
+    assert_eq!(graph.clone().into_flat(), graph.as_flat());
     for (i, p) in points.iter().enumerate() {
         let found: Vec<f64> = graph
             .neighbours(i)
