@@ -614,16 +614,17 @@ the default.
   samples stream past (bitwise the same results): 3 % slower on the LiDAR tile. Compiling for the
   host CPU (AVX2, AVX-512, FMA): no measurable change on the sphere, 7 % faster on the LiDAR
   tile. None is kept: the fit's cost is spread over moments, two factorisations and inverses,
-  and two residual passes, none of which is bound by arithmetic width. A real gain needs less work per point,
-  not faster loops: fewer scales or rounds under noise, which changes the estimator and must go
-  through this study again.
+  and two residual passes, none of which is bound by arithmetic width. A real gain needs less
+  work per point, not faster loops: fewer scales or rounds under noise, which changes the
+  estimator and must go through this study again.
 
 ## Targets of issue 11
 
 - **Met:** on the random, jittered and scanline clouds the k1 and k2 nRMS are at most 0.34× the
   reference's with file or estimated normals (target ≤ 0.5×), and from 10k to 40k random points
-  they fall 14× (k1) and 8.5–9.4× (k2) (target ≥ 4×); the noisy torus with file normals has k1 σ 6.3e-3 at σ = 1e-4 and
-  0.037 at σ = 1e-3 (targets 0.01 and 0.05); the paper torus's k1 and k2 σ are within 4.2e-4.
+  they fall 14× (k1) and 8.5–9.4× (k2) (target ≥ 4×); the noisy torus with file normals has
+  k1 σ 6.3e-3 at σ = 1e-4 and 0.037 at σ = 1e-3 (targets 0.01 and 0.05); the paper torus's k1
+  and k2 σ are within 4.2e-4.
 - **Calibration:** within a factor 2 in every decile on the random and noisy clouds except one
   decile of the 10k random torus with file normals, which over-predicts by 2.08×.
 - **Not met:** the paper's clean torus with file normals has k1 μ = −1.1e-4 (target
