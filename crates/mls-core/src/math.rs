@@ -115,6 +115,20 @@ mod tests {
     }
 
     #[test]
+    fn bounding_box_centre_is_the_middle_of_the_extremes() {
+        let points = [
+            Point::new(500_000.0, -2.0, 7.0),
+            Point::new(500_004.0, 6.0, 1.0),
+            Point::new(500_001.0, 0.0, 3.0),
+        ];
+        assert_eq!(
+            bounding_box_centre(&points),
+            Vector::new(500_002.0, 2.0, 4.0)
+        );
+        assert_eq!(bounding_box_centre(&[]), Vector::zeros());
+    }
+
+    #[test]
     fn unit_normal_rejects_bad_input() {
         assert_eq!(UnitNormal::new(Vector::zeros()), Err(NormalError::Zero));
         assert_eq!(

@@ -76,3 +76,38 @@ impl std::fmt::Display for PointStatus {
         f.write_str(self.name())
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Codes and names are written to output files: they are a file format, pinned here.
+    /// Descriptions are for people: present and different for each status.
+    #[test]
+    fn codes_and_names_are_the_file_format() {
+        assert_eq!(
+            PointStatus::ALL.map(PointStatus::code),
+            [1, 2, 3, 4, 5, 6, 7]
+        );
+        assert_eq!(
+            PointStatus::ALL.map(PointStatus::name),
+            [
+                "no_neighbours",
+                "too_few_neighbours",
+                "normal_undefined",
+                "gradient_vanishes",
+                "projection_failed",
+                "invalid_query",
+                "normal_estimation_failed",
+            ]
+        );
+        for s in PointStatus::ALL {
+            assert_eq!(s.to_string(), s.name());
+            assert!(s.description().len() > 20, "{s}: {}", s.description());
+        }
+        let mut descriptions = PointStatus::ALL.map(PointStatus::description).to_vec();
+        descriptions.sort_unstable();
+        descriptions.dedup();
+        assert_eq!(descriptions.len(), PointStatus::ALL.len());
+    }
+}

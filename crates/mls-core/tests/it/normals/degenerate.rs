@@ -134,6 +134,11 @@ fn invalid_parameters_are_errors() {
         with(|c| c.h = Some(1e-200)),
         Err(NormalsError::InvalidScale(1e-200))
     );
+    // h² is a subnormal here, not 0: 1/h² overflows.
+    assert_eq!(
+        with(|c| c.h = Some(1e-160)),
+        Err(NormalsError::InvalidScale(1e-160))
+    );
     assert_eq!(
         with(|c| c.degeneracy_tolerance = 1.0),
         Err(NormalsError::InvalidTolerance(1.0))
@@ -147,6 +152,21 @@ fn invalid_parameters_are_errors() {
     assert_eq!(
         estimate_normals(&bad, &NormalsConfig::default(), PAR).map(|_| ()),
         Err(NormalsError::Input(InputError::NonFinitePoint { index: 7 }))
+    );
+    // The parameters are checked before the points, and also where no scale can be measured
+    // (every point at one position), which skips the estimation that checks them again.
+    let loose = NormalsConfig {
+        degeneracy_tolerance: 1.0,
+        ..NormalsConfig::default()
+    };
+    assert_eq!(
+        estimate_normals(&bad, &loose, PAR).map(|_| ()),
+        Err(NormalsError::InvalidTolerance(1.0))
+    );
+    let one_position = vec![Point::new(1.0, 2.0, 3.0); 20];
+    assert_eq!(
+        estimate_normals(&one_position, &loose, PAR).map(|_| ()),
+        Err(NormalsError::InvalidTolerance(1.0))
     );
     let graph = NeighbourGraph::build(&points, 8, PAR).unwrap();
     assert!(matches!(
