@@ -65,3 +65,53 @@ pub(crate) fn morton_key(p: &Point, half_extent: f64) -> u64 {
     };
     spread(cell(p.x)) | spread(cell(p.y)) << 1 | spread(cell(p.z)) << 2
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The key interleaves the 21-bit cell indices x, y, z from the lowest bit up, over the
+    /// cube `[−h, h]³`: its corners are the first and last cells.
+    #[test]
+    fn morton_key_interleaves_the_cells() {
+        let h = 2.0;
+        let cells = ((1u64 << 21) - 1) as f64;
+        // The coordinate at the middle of cell `i` along an axis.
+        let at = |i: f64| ((i + 0.5) / cells - 0.5) * 2.0 * h;
+        let key = |x: f64, y: f64, z: f64| morton_key(&Point::new(at(x), at(y), at(z)), h);
+        assert_eq!(key(0.0, 0.0, 0.0), 0);
+        assert_eq!(key(1.0, 0.0, 0.0), 0b001);
+        assert_eq!(key(0.0, 1.0, 0.0), 0b010);
+        assert_eq!(key(0.0, 0.0, 1.0), 0b100);
+        // Cell 0b101 along x: its bits 0 and 2 go to bits 0 and 6.
+        assert_eq!(key(5.0, 0.0, 0.0), 0b100_0001);
+        // y = 0b101 to bits 1 and 7, z = 0b011 to bits 2 and 5.
+        assert_eq!(key(0.0, 5.0, 3.0), 1 << 1 | 1 << 7 | 1 << 2 | 1 << 5);
+        let corner = Point::new(h, h, h);
+        assert_eq!(morton_key(&corner, h), (1 << 63) - 1);
+        assert_eq!(morton_key(&-corner, h), 0);
+        // Outside the cube a coordinate is clamped to its face; a zero cube is one cell.
+        assert_eq!(morton_key(&(corner * 3.0), h), (1 << 63) - 1);
+        assert_eq!(
+            morton_key(&corner, 0.0),
+            key(cells / 2.0 - 0.5, cells / 2.0 - 0.5, cells / 2.0 - 0.5)
+        );
+    }
+
+    #[test]
+    fn a_frame_from_the_box_is_the_frame_of_the_points() {
+        let points = [
+            Point::new(500_000.0, -2.0, 7.0),
+            Point::new(500_004.0, 6.0, 1.5),
+            Point::new(500_001.0, 0.0, 3.0),
+        ];
+        let frame = Frame::of(&points);
+        assert_eq!(frame.origin, Vector::new(500_002.0, 2.0, 4.25));
+        assert_eq!(frame.half_extent, 4.0);
+        let box_frame = Frame::of_box(
+            Vector::new(500_000.0, -2.0, 1.5),
+            Vector::new(500_004.0, 6.0, 7.0),
+        );
+        assert_eq!(box_frame, frame);
+    }
+}
