@@ -276,7 +276,15 @@ pub(super) fn render(
 
     // Arithmetic bound.
     let flops: u32 = FLOPS_PER_NEIGHBOUR.iter().map(|(_, f)| f).sum();
-    let hash = fnv1a(FIELD_RS);
+    let hash = fnv1a(
+        &COUNTED_SOURCES
+            .iter()
+            .flat_map(|(_, b)| b.iter().copied())
+            .collect::<Vec<u8>>(),
+    );
+    let counted = COUNTED_SOURCES
+        .map(|(path, _)| format!("`{path}`"))
+        .join(" and ");
     let _ = writeln!(w, "## Arithmetic bound\n");
     let _ = writeln!(
         w,
@@ -298,11 +306,11 @@ pub(super) fn render(
     let _ = writeln!(
         w,
         "**Work per point**: `field::evaluate` makes two passes over the support. Per neighbour \
-         it costs **{flops} flops**, counted by reading `crates/mls-core/src/field.rs`: one \
+         it costs **{flops} flops**, counted by reading its per-sample loops in {counted}: one \
          flop per f64 add, subtract or multiply (none for comparisons, min or sign changes); \
          lengths are in units of h, so a = 1/h² is 1 and its products fold away at compile \
          time, while the 3 multiplies of each d = (x − q)/h are counted; `exp` as {EXP_FLOPS} \
-         (field.rs's branch-free `exp_weight`: range reduction, degree-5 polynomial, one division, \
+         (the branch-free `exp_weight`: range reduction, degree-5 polynomial, one division, \
          scaling by 2^k). The neighbour query, the \
          per-point 3 × 3 algebra and the curvature are not counted.\n"
     );
@@ -314,7 +322,7 @@ pub(super) fn render(
     if hash != FLOPS_COUNTED_HASH {
         let _ = writeln!(
             w,
-            "**The count may be stale**: the `field.rs` measured here is not the one counted \
+            "**The count may be stale**: the loops measured here ({counted}) are not the ones counted \
              (FNV-1a {hash:#018x}, counted {FLOPS_COUNTED_HASH:#018x}); recount \
              `FLOPS_PER_NEIGHBOUR` in `xtask/src/bench/mod.rs`.\n"
         );
