@@ -6,6 +6,8 @@ use mls_core::{Point, Sample, Vector};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
+mod jet;
+
 const SEED: u64 = 0x5eed_0002;
 
 fn rel(a: f64, b: f64, scale: f64) -> f64 {

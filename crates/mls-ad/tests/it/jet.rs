@@ -1,0 +1,148 @@
+//! The jet estimator (mls-core, the default method) against its witness (`mls_ad::jet_witness`)
+//! on small height-field patches: the quick version of `validate`'s jet rows, so that
+//! `cargo test` (and cargo-mutants, which runs it) sees a wrong fit, covariance or scale choice.
+
+use mls_core::{JetConfig, MlsConfig, MlsSurface, NormalData, Parallelism, Point, Sample, Vector};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+/// The surface `z = f(x, y)`: a quadric, a cubic and a ripple that no quartic reproduces, so
+/// that bias grows along the ladder and the scale choice has something to weigh.
+fn height(x: f64, y: f64) -> (f64, [f64; 2]) {
+    let (a, b, c, d, k) = (0.8, -0.3, -0.5, 0.4, 9.0);
+    let z = 0.5 * a * x * x + b * x * y + 0.5 * c * y * y + d * x * x * y + 0.02 * (k * x).sin();
+    let fx = a * x + b * y + 2.0 * d * x * y + 0.02 * k * (k * x).cos();
+    let fy = b * x + c * y + d * x * x;
+    (z, [fx, fy])
+}
+
+/// A random patch of `height` of half-width 0.5, with position noise `sigma` along z and
+/// normals tilted by up to `tilt` per component; a fraction `odd` of the normals either face
+/// away (samples of a far sheet, which the fit leaves out) or lean about 70° (whose slopes it
+/// leaves out).
+fn patch(
+    rng: &mut ChaCha8Rng,
+    n: usize,
+    sigma: f64,
+    tilt: f64,
+    odd: f64,
+) -> (Vec<Point>, Vec<Vector>) {
+    (0..n)
+        .map(|_| {
+            let (x, y) = (rng.random_range(-0.5..0.5), rng.random_range(-0.5..0.5));
+            let (z, [fx, fy]) = height(x, y);
+            let noise = sigma * rng.random_range(-1.0..1.0);
+            let t = Vector::new(
+                rng.random_range(-tilt..=tilt),
+                rng.random_range(-tilt..=tilt),
+                0.0,
+            );
+            let mut normal = (Vector::new(-fx, -fy, 1.0).normalize() + t).normalize();
+            if rng.random_bool(odd) {
+                normal = if rng.random_bool(0.5) {
+                    -normal
+                } else {
+                    (normal + Vector::new(2.7, 0.0, 0.0)).normalize()
+                };
+            }
+            (Point::new(x, y, z + noise), normal)
+        })
+        .unzip()
+}
+
+/// Relative thresholds: those of `cargo xtask validate` (k through one solve; the predicted
+/// error through M⁻¹ twice and the residuals), both scaled by the fit's conditioning.
+const K_THRESHOLD: f64 = 1e-10;
+const SD_THRESHOLD: f64 = 1e-5;
+
+#[test]
+fn jet_matches_its_witness_with_and_without_slopes() {
+    let mut rng = ChaCha8Rng::seed_from_u64(0x5eed_0003);
+    // (points, h in spacings, position noise, normal tilt, odd normals): clean; noisy (the
+    // ladder climbs); sparse (heights alone determine only lower degrees at the first
+    // scales); a tenth of the normals facing away or leaning.
+    let cases = [
+        (2500, 2.0, 0.0, 0.0, 0.0),
+        (2500, 2.0, 2e-3, 0.05, 0.0),
+        (700, 1.3, 0.0, 0.02, 0.0),
+        (1500, 2.0, 1e-3, 0.02, 0.1),
+    ];
+    let mut compared = 0;
+    let mut worst = [0.0f64; 3];
+    for (case, &(n, factor, sigma, tilt, odd)) in cases.iter().enumerate() {
+        let (points, normals) = patch(&mut rng, n, sigma, tilt, odd);
+        let h = factor / (n as f64).sqrt();
+        let surface = MlsSurface::new(&points, &normals, MlsConfig::new(h)).unwrap();
+        let samples: Vec<Sample> = points
+            .iter()
+            .zip(&normals)
+            .map(|(p, v)| Sample {
+                point: *p,
+                normal: *v,
+            })
+            .collect();
+        // Queries near the middle (every scale's support inside the patch), on and off the
+        // samples.
+        let queries: Vec<Point> = (0..12)
+            .map(|i| {
+                let (x, y) = (rng.random_range(-0.1..0.1), rng.random_range(-0.1..0.1));
+                let off = if i % 2 == 0 { 0.0 } else { 0.3 * h };
+                Point::new(x, y, height(x, y).0 + off)
+            })
+            .chain(
+                points
+                    .iter()
+                    .filter(|p| p.x.abs().max(p.y.abs()) < 0.1)
+                    .take(12)
+                    .copied(),
+            )
+            .collect();
+        for normals in [NormalData::Slopes, NormalData::Ignore] {
+            let config = JetConfig {
+                normals,
+                ..JetConfig::default()
+            };
+            let results = surface.jet_at_points(&queries, &config, Parallelism::Rayon);
+            for (x, r) in queries.iter().zip(results) {
+                let w = mls_ad::jet_witness(&x.coords, &samples, h, &config);
+                let (j, w) = match (r, w) {
+                    (Ok(j), Some(w)) => (j, w),
+                    (r, w) => panic!("case {case} {normals:?} at {x:?}: {r:?} against {w:?}"),
+                };
+                let what = format!("case {case} {normals:?} at {x:?}");
+                assert_eq!(
+                    (j.fit.degree, j.fit.radius),
+                    (w.degree, w.radius),
+                    "{what}: degree and radius"
+                );
+                let kappa = w.k1.abs().max(w.k2.abs()).max(1.0 / h);
+                let rounding = 1e3 * f64::EPSILON * w.condition;
+                for (got, want, i) in [(j.curvature.k1, w.k1, 0), (j.curvature.k2, w.k2, 1)] {
+                    let e = (got - want).abs() / kappa;
+                    worst[i] = worst[i].max(e / rounding.max(K_THRESHOLD));
+                    assert!(
+                        e <= rounding.max(K_THRESHOLD),
+                        "{what}: k{} {got} against {want}",
+                        i + 1
+                    );
+                }
+                let pe = j.predicted_error();
+                let we = [0, 1].map(|i| w.sd[i].hypot(w.bias[i]));
+                let scale = we[0]
+                    .max(we[1])
+                    .max(1e3 * mls_core::jet::SD_FLOOR / w.radius);
+                let e = (pe[0] - we[0]).abs().max((pe[1] - we[1]).abs()) / scale;
+                worst[2] = worst[2].max(e / rounding.max(SD_THRESHOLD));
+                assert!(
+                    e <= rounding.max(SD_THRESHOLD),
+                    "{what}: predicted error {pe:?} against {we:?}"
+                );
+                let foot = j.foot.coords - w.foot;
+                assert!(foot.norm() <= 1e-9 * h, "{what}: foot {foot:?}");
+                compared += 1;
+            }
+        }
+    }
+    assert_eq!(compared, cases.len() * 2 * 24);
+    eprintln!("worst k1, k2, predicted error, in units of their thresholds: {worst:?}");
+}
