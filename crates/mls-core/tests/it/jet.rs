@@ -139,3 +139,53 @@ fn assert_calibrated(name: &str, mut e: Vec<[f64; 3]>) {
         }
     }
 }
+
+/// A jet depends on the samples within `tiling::reach` of its query and on no others, which is
+/// what lets the out-of-core run cut a cloud into tiles with halos of that width: on a noisy
+/// torus (where the ladder climbs to its largest radius, whose fit enters the bias estimate
+/// even when a smaller scale is chosen), each query's jet from only the samples within the
+/// reach, in the whole cloud's frame, is bitwise the whole cloud's; within 0.99 of the reach,
+/// some are not.
+#[test]
+fn a_jet_needs_exactly_the_samples_within_its_reach() {
+    use mls_core::tiling::reach;
+    use mls_core::{Cutoff, Frame};
+    let torus = Torus::new(6.0, 2.0);
+    let samples = mls_shapes::surface_points(&mls_shapes::random_area_uniform(&torus, 8_000, SEED));
+    let clean: Vec<Point> = samples.iter().map(|s| s.point).collect();
+    let h = cli_h(&clean);
+    let points: Vec<Point> = mls_shapes::add_position_noise(&clean, 0.05 * h, SEED);
+    let normals: Vec<Vector> = samples.iter().map(|s| s.normal).collect();
+    let frame = Frame::of(&points);
+    let config = JetConfig::default();
+    let whole = MlsSurface::with_frame(&points, &normals, MlsConfig::new(h), frame).unwrap();
+    let queries: Vec<Point> = points.iter().step_by(400).copied().collect();
+    let expected = whole.jet_at_points(&queries, &config, Parallelism::Sequential);
+    let r = reach(h, Cutoff::Radius(5.0), Some(&config), false).unwrap();
+    let mut differ = 0;
+    for (q, want) in queries.iter().zip(&expected) {
+        for (fraction, must_equal) in [(1.0, true), (0.99, false)] {
+            let (near, near_normals): (Vec<Point>, Vec<Vector>) = points
+                .iter()
+                .zip(&normals)
+                .filter(|(p, _)| (*p - q).norm() <= fraction * r)
+                .map(|(p, n)| (*p, *n))
+                .unzip();
+            let part =
+                MlsSurface::with_frame(&near, &near_normals, MlsConfig::new(h), frame).unwrap();
+            let got = part.jet_at_points(&[*q], &config, Parallelism::Sequential);
+            if must_equal {
+                assert_eq!(
+                    &got[0], want,
+                    "query {q:?}: the jet changed within its reach"
+                );
+            } else if &got[0] != want {
+                differ += 1;
+            }
+        }
+    }
+    assert!(
+        differ > 0,
+        "no jet needed the samples between 0.99 and 1 of the reach"
+    );
+}
