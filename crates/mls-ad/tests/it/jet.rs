@@ -6,12 +6,13 @@ use mls_core::{JetConfig, MlsConfig, MlsSurface, NormalData, Parallelism, Point,
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
-/// The surface `z = f(x, y)`: a quadric, a cubic and a ripple that no quartic reproduces, so
-/// that bias grows along the ladder and the scale choice has something to weigh.
-fn height(x: f64, y: f64) -> (f64, [f64; 2]) {
+/// The surface `z = f(x, y)`: a quadric, a cubic and a ripple of amplitude `ripple` that no
+/// quartic reproduces, so that bias grows along the ladder and the scale choice has something
+/// to weigh. Without the ripple every fit is exact and its predicted error sits at the floor.
+fn height(x: f64, y: f64, ripple: f64) -> (f64, [f64; 2]) {
     let (a, b, c, d, k) = (0.8, -0.3, -0.5, 0.4, 9.0);
-    let z = 0.5 * a * x * x + b * x * y + 0.5 * c * y * y + d * x * x * y + 0.02 * (k * x).sin();
-    let fx = a * x + b * y + 2.0 * d * x * y + 0.02 * k * (k * x).cos();
+    let z = 0.5 * a * x * x + b * x * y + 0.5 * c * y * y + d * x * x * y + ripple * (k * x).sin();
+    let fx = a * x + b * y + 2.0 * d * x * y + ripple * k * (k * x).cos();
     let fy = b * x + c * y + d * x * x;
     (z, [fx, fy])
 }
@@ -23,14 +24,12 @@ fn height(x: f64, y: f64) -> (f64, [f64; 2]) {
 fn patch(
     rng: &mut ChaCha8Rng,
     n: usize,
-    sigma: f64,
-    tilt: f64,
-    odd: f64,
+    (sigma, tilt, odd, ripple): (f64, f64, f64, f64),
 ) -> (Vec<Point>, Vec<Vector>) {
     (0..n)
         .map(|_| {
             let (x, y) = (rng.random_range(-0.5..0.5), rng.random_range(-0.5..0.5));
-            let (z, [fx, fy]) = height(x, y);
+            let (z, [fx, fy]) = height(x, y, ripple);
             let noise = sigma * rng.random_range(-1.0..1.0);
             let t = Vector::new(
                 rng.random_range(-tilt..=tilt),
@@ -58,19 +57,21 @@ const SD_THRESHOLD: f64 = 1e-5;
 #[test]
 fn jet_matches_its_witness_with_and_without_slopes() {
     let mut rng = ChaCha8Rng::seed_from_u64(0x5eed_0003);
-    // (points, h in spacings, position noise, normal tilt, odd normals): clean; noisy (the
-    // ladder climbs); sparse (heights alone determine only lower degrees at the first
-    // scales); a tenth of the normals facing away or leaning.
+    // (points, h in spacings, (position noise, normal tilt, odd normals, ripple)): clean;
+    // noisy (the ladder climbs); sparse (heights alone determine only lower degrees at the
+    // first scales); a tenth of the normals facing away or leaning; an exact cubic (every
+    // predicted error at its floor).
     let cases = [
-        (2500, 2.0, 0.0, 0.0, 0.0),
-        (2500, 2.0, 2e-3, 0.05, 0.0),
-        (700, 1.3, 0.0, 0.02, 0.0),
-        (1500, 2.0, 1e-3, 0.02, 0.1),
+        (2500, 2.0, (0.0, 0.0, 0.0, 0.02)),
+        (2500, 2.0, (2e-3, 0.05, 0.0, 0.02)),
+        (700, 1.3, (0.0, 0.02, 0.0, 0.02)),
+        (1500, 2.0, (1e-3, 0.02, 0.1, 0.02)),
+        (1500, 2.0, (0.0, 0.0, 0.0, 0.0)),
     ];
     let mut compared = 0;
     let mut worst = [0.0f64; 3];
-    for (case, &(n, factor, sigma, tilt, odd)) in cases.iter().enumerate() {
-        let (points, normals) = patch(&mut rng, n, sigma, tilt, odd);
+    for (case, &(n, factor, shape)) in cases.iter().enumerate() {
+        let (points, normals) = patch(&mut rng, n, shape);
         let h = factor / (n as f64).sqrt();
         let surface = MlsSurface::new(&points, &normals, MlsConfig::new(h)).unwrap();
         let samples: Vec<Sample> = points
@@ -87,7 +88,7 @@ fn jet_matches_its_witness_with_and_without_slopes() {
             .map(|i| {
                 let (x, y) = (rng.random_range(-0.1..0.1), rng.random_range(-0.1..0.1));
                 let off = if i % 2 == 0 { 0.0 } else { 0.3 * h };
-                Point::new(x, y, height(x, y).0 + off)
+                Point::new(x, y, height(x, y, shape.3).0 + off)
             })
             .chain(
                 points
