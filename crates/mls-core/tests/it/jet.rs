@@ -189,3 +189,68 @@ fn a_jet_needs_exactly_the_samples_within_its_reach() {
         "no jet needed the samples between 0.99 and 1 of the reach"
     );
 }
+
+/// The degree a fit can afford: 1.5 equations per coefficient (`MIN_EQUATIONS_PER_COEFFICIENT`),
+/// at its boundaries. Heights alone on an exact quartic: 23 samples determine degree 4 (22.5
+/// equations needed), 22 only degree 3; 15 still degree 3 (15 needed), 14 only degree 2; 9
+/// degree 2, 8 none. With slopes each sample brings three equations: 8 samples determine
+/// degree 4 (24 ≥ 22.5).
+#[test]
+fn a_fit_takes_the_highest_degree_its_equations_determine() {
+    use mls_core::Sample;
+    use mls_core::jet::{JetScratch, fit, frame};
+    use rand::{Rng, SeedableRng};
+    let quartic = |u: f64, v: f64| {
+        let z = 0.3 * u * u - 0.2 * u * v + 0.1 * v * v * v + 0.05 * u * u * u * v;
+        let (zu, zv) = (
+            0.6 * u - 0.2 * v + 0.15 * u * u * v,
+            -0.2 * u + 0.3 * v * v + 0.05 * u * u * u,
+        );
+        (z, Vector::new(-zu, -zv, 1.0).normalize())
+    };
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(SEED);
+    let mut cloud = |n: usize| -> Vec<Sample> {
+        (0..n)
+            .map(|_| {
+                // Within 0.84 of the axis and 0.4 of the plane: inside the radius-1 support.
+                let (r, t) = (
+                    rng.random_range(0.05f64..0.7).sqrt(),
+                    rng.random_range(0.0..std::f64::consts::TAU),
+                );
+                let (u, v) = (r * t.cos(), r * t.sin());
+                let (z, normal) = quartic(u, v);
+                Sample {
+                    point: Point::new(u, v, z),
+                    normal,
+                }
+            })
+            .collect()
+    };
+    let frame = frame(&Vector::z());
+    let mut scratch = JetScratch::default();
+    let mut degree = |samples: &[Sample], normals: NormalData| {
+        fit(
+            samples,
+            &Point::origin(),
+            &frame,
+            1.0,
+            4,
+            normals,
+            &mut scratch,
+        )
+        .map(|f| (f.degree, f.equations))
+    };
+    for (n, want) in [
+        (23, Some(4)),
+        (22, Some(3)),
+        (15, Some(3)),
+        (14, Some(2)),
+        (9, Some(2)),
+        (8, None),
+    ] {
+        let got = degree(&cloud(n), NormalData::Ignore);
+        assert_eq!(got.map(|g| g.0), want, "{n} heights: {got:?}");
+    }
+    assert_eq!(degree(&cloud(8), NormalData::Slopes), Some((4, 24)));
+    assert_eq!(degree(&cloud(7), NormalData::Slopes), Some((3, 21)));
+}
