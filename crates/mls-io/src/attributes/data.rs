@@ -193,8 +193,8 @@ impl AttributeData {
     }
 
     /// Appends a value written as text, which must be a number of the column's type (an
-    /// integer in range for integer types; NaN and infinities are accepted for floats). The
-    /// error is a phrase for a message.
+    /// integer in range for integer types; NaN and infinities are accepted for floats, but not
+    /// a finite number that float32 rounds to infinity). The error is a phrase for a message.
     pub(crate) fn push_text(&mut self, token: &str) -> Result<(), String> {
         let ty = self.ty();
         macro_rules! push {
@@ -217,7 +217,19 @@ impl AttributeData {
             Self::U32(v) => push!(v, u32),
             Self::I64(v) => push!(v, i64),
             Self::U64(v) => push!(v, u64),
-            Self::F32(v) => push!(v, f32),
+            Self::F32(v) => {
+                push!(v, f32);
+                if v.last().is_some_and(|x| x.is_infinite())
+                    && token.parse::<f64>().is_ok_and(f64::is_finite)
+                {
+                    v.pop();
+                    return Err(format!(
+                        "{} is beyond the range of {}",
+                        crate::error::quoted(token),
+                        ty.name()
+                    ));
+                }
+            }
             Self::F64(v) => push!(v, f64),
         }
         Ok(())
@@ -253,6 +265,14 @@ mod tests {
         f.push_text("nan").unwrap();
         assert_eq!(f.f64_at(0), Some(1.5));
         assert!(f.f64_at(1).is_some_and(f64::is_nan));
+        // A finite value beyond float32 is refused, not stored as infinity; "inf" is kept.
+        assert!(
+            f.push_text("1e39")
+                .unwrap_err()
+                .contains("\"1e39\" is beyond the range of float32")
+        );
+        f.push_text("-inf").unwrap();
+        assert_eq!(f.f64_at(2), Some(f64::NEG_INFINITY));
         for code in 1..=10 {
             let ty = AttributeType::from_las_code(code).unwrap();
             assert_eq!(ty.las_code(), code);

@@ -85,6 +85,24 @@ impl ScalarType {
         }
     }
 
+    /// Whether an ASCII body's value `v` is one of this type's values: within the range of
+    /// float32 for `float`, a whole number within range for the integers. A `float` written
+    /// with more digits than float32 keeps them (sloppy writers are common and the digits are
+    /// the writer's intent); a value the type cannot hold at all is a broken file.
+    pub(super) fn holds(self, v: f64) -> bool {
+        let whole_within = |lo: f64, hi: f64| v.fract() == 0.0 && (lo..=hi).contains(&v);
+        match self {
+            Self::I8 => whole_within(i8::MIN.into(), i8::MAX.into()),
+            Self::U8 => whole_within(0.0, u8::MAX.into()),
+            Self::I16 => whole_within(i16::MIN.into(), i16::MAX.into()),
+            Self::U16 => whole_within(0.0, u16::MAX.into()),
+            Self::I32 => whole_within(i32::MIN.into(), i32::MAX.into()),
+            Self::U32 => whole_within(0.0, u32::MAX.into()),
+            Self::F32 => v.abs() <= f64::from(f32::MAX),
+            Self::F64 => true,
+        }
+    }
+
     pub(super) const fn is_integer(self) -> bool {
         !matches!(self, Self::F32 | Self::F64)
     }

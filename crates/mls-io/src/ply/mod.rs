@@ -247,10 +247,21 @@ fn read_ascii_vertices<R: BufRead>(
                 return Err(error(property, "missing value (row too short)".to_owned()));
             };
             match property.kind {
-                PropertyKind::Scalar(_) => match *target {
+                PropertyKind::Scalar(ty) => match *target {
                     Target::Slot(slot) => {
                         if let Some(value) = values.get_mut(slot) {
-                            *value = parse_finite(token).map_err(|m| error(property, m))?;
+                            let v = parse_finite(token).map_err(|m| error(property, m))?;
+                            if !ty.holds(v) {
+                                return Err(error(
+                                    property,
+                                    format!(
+                                        "{} is not a value of the declared type {}",
+                                        quoted(token),
+                                        ty.name()
+                                    ),
+                                ));
+                            }
+                            *value = v;
                         }
                     }
                     Target::Attribute(i) => {

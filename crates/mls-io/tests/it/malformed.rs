@@ -262,7 +262,15 @@ fn non_finite_binary_values_name_offset_and_property() {
 #[test]
 fn ascii_body_errors_name_line_and_property() {
     let header = format!("ply\nformat ascii 1.0\nelement vertex 3\n{XYZ_FLOAT}end_header\n");
-    let cases: [(&str, &[&str]); 6] = [
+    let cases: [(&str, &[&str]); 7] = [
+        (
+            "1 2 3\n4 5 1e39\n",
+            &[
+                "line 9",
+                "vertex 1 property z",
+                "\"1e39\" is not a value of the declared type float32",
+            ],
+        ),
         (
             "1 2 3\n4 5\n",
             &["line 9", "vertex 1 property z", "missing value"],
@@ -292,6 +300,44 @@ fn ascii_body_errors_name_line_and_property() {
         let err = ply_err(ply(&header, body.as_bytes()).as_slice());
         assert!(matches!(err, ReadError::Ascii { .. }), "{body:?}: {err:?}");
         assert_message(&err, "bad.ply", parts);
+    }
+}
+
+/// An ASCII value must be one its declared type can hold (a float32 beyond 3.4e38, a fraction
+/// or a negative number for an unsigned byte), while a float32 written with more digits than
+/// float32 has keeps them.
+#[test]
+fn ascii_values_must_fit_their_declared_type() {
+    let header = |ty: &str| {
+        format!(
+            "ply\nformat ascii 1.0\nelement vertex 1\nproperty {ty} x\nproperty float y\n\
+             property float z\nend_header\n"
+        )
+    };
+    for (ty, x, fits) in [
+        ("float", "3.4e38", true),
+        ("float", "-3.5e38", false),
+        ("float", "0.1234567890123", true),
+        ("double", "1e300", true),
+        ("uchar", "255", true),
+        ("uchar", "256", false),
+        ("uchar", "-1", false),
+        ("int", "2.5", false),
+        ("short", "-32768", true),
+    ] {
+        let bytes = ply(&header(ty), format!("{x} 0 0\n").as_bytes());
+        let got = read_ply(bytes.as_slice(), "bad.ply");
+        match (fits, got) {
+            (true, Ok(cloud)) => assert_eq!(cloud.points[0][0], x.parse::<f64>().unwrap()),
+            (false, Err(err)) => {
+                assert_message(
+                    &err,
+                    "bad.ply",
+                    &["vertex 0 property x", "is not a value of the declared type"],
+                );
+            }
+            (_, got) => panic!("{ty} {x}: {got:?}"),
+        }
     }
 }
 
