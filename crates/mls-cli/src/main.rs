@@ -94,7 +94,9 @@ struct SurfaceArgs {
     /// `viewpoint:X,Y,Z` (towards a scanner position), `up` (positive z, for airborne scans),
     /// or `none`. `viewpoint` and `up` decide each smooth patch by a vote of its points.
     /// Default: towards each point's own scanner (its scan's pose) for an E57 input whose
-    /// scans all have a pose, by the same vote; else `mst`.
+    /// scans all have a pose, by the same vote; else `mst`, or `up` when that leaves three
+    /// quarters of the normals within 60° of vertical on one side (a sheet seen from above,
+    /// such as terrain and roofs; a closed object has half).
     #[arg(long, value_parser = parse_orient)]
     orient: Option<mls_core::normals::Orientation>,
     #[arg(long, value_parser = mls_io::ColumnNames::parse, help = COLUMNS_HELP)]
@@ -232,7 +234,8 @@ struct NormalsArgs {
     #[command(flatten)]
     scale: ScaleArgs,
     /// Orientation: `mst`, `viewpoint:X,Y,Z`, `up`, or `none`. Default: towards each
-    /// point's own scanner for an E57 input whose scans all have a pose, else `mst`.
+    /// point's own scanner for an E57 input whose scans all have a pose, else `mst`, or `up`
+    /// for a sheet seen from above (as for `curvature`).
     #[arg(long, value_parser = parse_orient)]
     orient: Option<mls_core::normals::Orientation>,
     #[arg(long, value_parser = mls_io::ColumnNames::parse, help = COLUMNS_HELP)]

@@ -40,9 +40,11 @@ use crate::{
 ///     form (Yang & Qian 2007).
 /// at : "input" or "projected"
 ///     Evaluate at the input points (default) or at their projections onto the surface.
-/// orient : str
-///     Orientation of estimated normals: ``"mst"`` (outward; default), ``"up"``,
-///     ``"viewpoint:X,Y,Z"`` or ``"none"``.
+/// orient : str, optional
+///     Orientation of estimated normals: ``"mst"`` (outward), ``"up"``,
+///     ``"viewpoint:X,Y,Z"`` or ``"none"``. Default: as ``mlscurv``, outward, or up for a
+///     sheet seen from above (three quarters of the outward normals within 60° of vertical on
+///     one side, as terrain and roofs; a closed object has half).
 /// adaptive : bool
 ///     A scale per point, from h up to 4 h (adds ``h`` and ``noise``); ``method="paper"`` only.
 /// threads : int, optional
@@ -81,10 +83,10 @@ use crate::{
 #[pyfunction]
 #[pyo3(signature = (
     points, normals=None, *, h=None, h_factor=None, cutoff=Some(CutoffArg::Factor(5.0)),
-    method="jet", at="input", orient="mst", adaptive=false, threads=None
+    method="jet", at="input", orient=None, adaptive=false, threads=None
 ))]
 #[pyo3(
-    text_signature = "(points, normals=None, *, h=None, h_factor=2.0, cutoff=5.0, method='jet', at='input', orient='mst', adaptive=False, threads=None)"
+    text_signature = "(points, normals=None, *, h=None, h_factor=2.0, cutoff=5.0, method='jet', at='input', orient=None, adaptive=False, threads=None)"
 )]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn curvature<'py>(
@@ -96,7 +98,7 @@ pub(crate) fn curvature<'py>(
     cutoff: Option<CutoffArg>,
     method: &str,
     at: &str,
-    orient: &str,
+    orient: Option<&str>,
     adaptive: bool,
     threads: Option<usize>,
 ) -> PyResult<Table> {
@@ -107,7 +109,7 @@ pub(crate) fn curvature<'py>(
             h_factor,
             cutoff: crate::cutoff(cutoff)?,
             normals: NormalsMode::Auto,
-            orient: Some(crate::orient(orient)?),
+            orient: orient.map(crate::orient).transpose()?,
         },
         method: crate::method(method)?,
         at: crate::at(at)?,
@@ -172,9 +174,10 @@ pub(crate) fn curvature<'py>(
 ///     The cloud (at least 4 finite points; float64 C-contiguous input is not copied).
 /// h, h_factor : float, optional
 ///     The scale that weighs the neighbours, as for ``curvature``.
-/// orient : str
-///     ``"mst"`` (outward, by minimum spanning tree; default), ``"up"`` (+z, airborne scans),
-///     ``"viewpoint:X,Y,Z"`` (towards a scanner) or ``"none"``.
+/// orient : str, optional
+///     ``"mst"`` (outward, by minimum spanning tree), ``"up"`` (+z, airborne scans),
+///     ``"viewpoint:X,Y,Z"`` (towards a scanner) or ``"none"``. Default: as ``mlscurv``,
+///     outward, or up for a sheet seen from above.
 /// threads : int, optional
 ///     Worker threads (default: all cores).
 ///
@@ -193,18 +196,18 @@ pub(crate) fn curvature<'py>(
 /// >>> r.normals[0].tolist(), r.keys()
 /// ([0.0, 0.0, 1.0], ['x', 'y', 'z', 'nx', 'ny', 'nz', 'status'])
 #[pyfunction]
-#[pyo3(signature = (points, *, h=None, h_factor=None, orient="mst", threads=None))]
-#[pyo3(text_signature = "(points, *, h=None, h_factor=2.0, orient='mst', threads=None)")]
+#[pyo3(signature = (points, *, h=None, h_factor=None, orient=None, threads=None))]
+#[pyo3(text_signature = "(points, *, h=None, h_factor=2.0, orient=None, threads=None)")]
 pub(crate) fn normals<'py>(
     py: Python<'py>,
     points: &Bound<'py, PyAny>,
     h: Option<f64>,
     h_factor: Option<f64>,
-    orient: &str,
+    orient: Option<&str>,
     threads: Option<usize>,
 ) -> PyResult<Table> {
     let (h, h_factor) = scale_options(h, h_factor)?;
-    let orient = crate::orient(orient)?;
+    let orient = orient.map(crate::orient).transpose()?;
     let threads = crate::threads(threads)?;
     let Input { array, .. } = Input::new(points, None)?;
     let readonly = array.readonly();
@@ -227,7 +230,7 @@ pub(crate) fn normals<'py>(
                         points,
                         Some(&index),
                         NormalsMode::Estimate,
-                        Some(orient),
+                        orient,
                         None,
                         scale.h,
                         par,
@@ -287,10 +290,10 @@ pub(crate) fn names(names: &[&str]) -> Vec<String> {
 #[pyfunction]
 #[pyo3(signature = (
     points, normals=None, *, h=None, h_factor=None, cutoff=Some(CutoffArg::Factor(5.0)),
-    orient="mst", threads=None
+    orient=None, threads=None
 ))]
 #[pyo3(
-    text_signature = "(points, normals=None, *, h=None, h_factor=2.0, cutoff=5.0, orient='mst', threads=None)"
+    text_signature = "(points, normals=None, *, h=None, h_factor=2.0, cutoff=5.0, orient=None, threads=None)"
 )]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn project<'py>(
@@ -300,7 +303,7 @@ pub(crate) fn project<'py>(
     h: Option<f64>,
     h_factor: Option<f64>,
     cutoff: Option<CutoffArg>,
-    orient: &str,
+    orient: Option<&str>,
     threads: Option<usize>,
 ) -> PyResult<Table> {
     let (h, h_factor) = scale_options(h, h_factor)?;
@@ -309,7 +312,7 @@ pub(crate) fn project<'py>(
         h_factor,
         cutoff: crate::cutoff(cutoff)?,
         normals: NormalsMode::Auto,
-        orient: Some(crate::orient(orient)?),
+        orient: orient.map(crate::orient).transpose()?,
     };
     let threads = crate::threads(threads)?;
     let Input { array, normals } = Input::new(points, normals)?;

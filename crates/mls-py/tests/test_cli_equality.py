@@ -89,10 +89,24 @@ def test_bunny_equals_cli(run_cli, tmp_path):
 def test_normals_equal_cli(cloud_file, run_cli, tmp_path):
     points, path = cloud_file
     out = tmp_path / "normals.ply"
-    run_cli("normals", path, "-o", out, "--orient", "mst", "--quiet")
+    run_cli("normals", path, "-o", out, "--quiet")
     result = mlscurv.normals(points)
     assert_same_table(result, out)
     assert result.points is points
+
+
+def test_default_orientation_of_a_sheet_equals_cli(run_cli, tmp_path):
+    """A height field seen from above: by default both orient it up, not outward."""
+    g = np.stack(np.meshgrid(np.arange(40.0), np.arange(40.0)), -1).reshape(-1, 2)
+    z = 2.0 * np.sin(g[:, 0] / 6.0) * np.cos(g[:, 1] / 9.0)
+    points = np.column_stack([g, z])
+    path = tmp_path / "sheet.ply"
+    mlscurv.write(path, points)
+    out = tmp_path / "normals.ply"
+    run_cli("normals", path, "-o", out, "--quiet")
+    result = mlscurv.normals(points)
+    assert_same_table(result, out)
+    assert (result.normals[:, 2] > 0).all()
 
 
 def test_project_equals_cli(cloud_file, run_cli, tmp_path):

@@ -4,8 +4,8 @@
 
 use anyhow::{Context, Result, bail};
 use mls_core::normals::{
-    DEFAULT_NEIGHBOURS, NormalsConfig, Orientation, estimate_normals, estimate_normals_on,
-    orient_normals_towards,
+    DEFAULT_NEIGHBOURS, EstimatedNormals, NormalsConfig, Orientation, estimate_normals,
+    estimate_normals_on, orient_normals, orient_normals_towards,
 };
 use mls_core::{IndexedCloud, Parallelism, Point, Vector};
 use mls_io::PointCloud;
@@ -78,7 +78,8 @@ pub fn normals(
         (None, Some(v)) => Some(v),
         _ => None,
     };
-    let orientation = orientation.unwrap_or_default();
+    let defaulted = orientation.is_none() && per_scan.is_none();
+    let mut orientation = orientation.unwrap_or_default();
     let config = NormalsConfig {
         k: DEFAULT_NEIGHBOURS,
         h: Some(h),
@@ -99,6 +100,17 @@ pub fn normals(
             orient_normals_towards(points, &est.graph, &mut est.estimates, viewpoints, par)
                 .with_context(|| format!("{file}: normal orientation"))?;
     }
+    // The default outward rule, on a sheet seen from above, gives way to `up`.
+    let mut chosen = String::new();
+    if defaulted && let Some(level) = seen_from_above(&est) {
+        est.report = orient_normals(points, &est.graph, &mut est.estimates, Orientation::Up, par)
+            .with_context(|| format!("{file}: normal orientation"))?;
+        orientation = Orientation::Up;
+        chosen = format!(
+            " (default for a sheet seen from above: outward left {level:.1}% of the normals \
+             within 60° of vertical on one side; --orient mst for outward)"
+        );
+    }
     let orient = match orientation {
         _ if per_scan.is_some() => "oriented towards each scan's scanner position (E57 pose) by \
             minimum spanning tree and a vote per smooth patch"
@@ -109,7 +121,7 @@ pub fn normals(
             v.x, v.y, v.z
         ),
         Orientation::Up => {
-            "oriented up (+z) by minimum spanning tree and a vote per smooth patch".to_string()
+            format!("oriented up (+z) by minimum spanning tree and a vote per smooth patch{chosen}")
         }
         Orientation::None => "not oriented (--orient none)".to_string(),
     };
@@ -155,4 +167,29 @@ pub fn normals(
         source,
         from_file: false,
     })
+}
+
+/// Whether a cloud oriented outward is a sheet seen from above rather than a closed object,
+/// and then the share (%) of its normals within 60° of vertical that lie on the majority's
+/// side of the horizontal.
+///
+/// A closed surface has no net flux: over it `Σ n_z` cancels, and about half of its normals
+/// within 60° of vertical point down (the bunny 47 %, a sphere 50 %). An open sheet that is a
+/// height field, such as terrain and roofs seen from above, has them nearly all on one side
+/// (the aerial tile in `tests/data` 95.5 % up after the outward rule, which carried the sign
+/// across creases wrongly for the rest, and so flipped their curvature). The sheet is
+/// recognised when at least three quarters lie on one side, halfway between the two; on it
+/// `up` is the orientation a scan from above has, and outward (away from the centroid) is not
+/// defined. Fewer than 100 such normals decide nothing.
+fn seen_from_above(est: &EstimatedNormals) -> Option<f64> {
+    let (mut level, mut up) = (0usize, 0usize);
+    for e in est.estimates.iter().flatten() {
+        let z = e.normal.into_inner().z;
+        if z.abs() >= 0.5 {
+            level += 1;
+            up += usize::from(z > 0.0);
+        }
+    }
+    let majority = up.max(level - up) as f64 / level as f64;
+    (level >= 100 && majority >= 0.75).then_some(100.0 * majority)
 }

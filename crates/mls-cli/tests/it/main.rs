@@ -17,6 +17,7 @@ mod info;
 mod large_h;
 mod las;
 mod normals;
+mod orient_default;
 mod overwrite;
 mod project;
 mod reference;

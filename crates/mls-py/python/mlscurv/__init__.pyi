@@ -95,7 +95,7 @@ def curvature(
     cutoff: Cutoff = 5.0,
     method: Literal["jet", "paper"] = "jet",
     at: Literal["input", "projected"] = "input",
-    orient: str = "mst",
+    orient: Optional[str] = None,
     adaptive: bool = False,
     threads: Optional[int] = None,
 ) -> Result:
@@ -107,7 +107,7 @@ def normals(
     *,
     h: Optional[float] = None,
     h_factor: Optional[float] = None,
-    orient: str = "mst",
+    orient: Optional[str] = None,
     threads: Optional[int] = None,
 ) -> Result:
     """Estimated and oriented normals, as ``mlscurv normals`` computes them."""
@@ -119,7 +119,7 @@ def project(
     h: Optional[float] = None,
     h_factor: Optional[float] = None,
     cutoff: Cutoff = 5.0,
-    orient: str = "mst",
+    orient: Optional[str] = None,
     threads: Optional[int] = None,
 ) -> Result:
     """The points projected onto the MLS surface, with its normals, as ``mlscurv project``."""
