@@ -253,4 +253,11 @@ fn a_fit_takes_the_highest_degree_its_equations_determine() {
     }
     assert_eq!(degree(&cloud(8), NormalData::Slopes), Some((4, 24)));
     assert_eq!(degree(&cloud(7), NormalData::Slopes), Some((3, 21)));
+    // Normals more than 60° off the frame give heights but no slopes: 8 heights and one
+    // sample's two slopes are 10 equations, enough for degree 2 (9).
+    let mut few_slopes = cloud(8);
+    for s in &mut few_slopes[1..] {
+        s.normal = Vector::new(0.9, 0.0, 0.3).normalize();
+    }
+    assert_eq!(degree(&few_slopes, NormalData::Slopes), Some((2, 10)));
 }
