@@ -17,7 +17,7 @@ pub const UNIT_TOLERANCE: f64 = 1e-3;
 /// such as `x,y,z,nx,ny,nz,intensity`.
 ///
 /// Names are case-insensitive. `x`, `y`, `z` (required) and `nx`, `ny`, `nz` (all three or
-/// none) are the geometry; any other name (`intensity`, `r`, `g`, `b` …) names an attribute,
+/// none; `normal_x` … as PCL writes them are read as these) are the geometry; any other name (`intensity`, `r`, `g`, `b` …) names an attribute,
 /// carried to the output under that name, and `_` marks a column that is skipped without
 /// being parsed. Each name is letters, digits and `_`, and every name but `_` appears at most
 /// once.
@@ -29,7 +29,7 @@ impl ColumnNames {
     pub fn parse(description: &str) -> Result<Self, String> {
         let names: Vec<String> = description
             .split(',')
-            .map(|n| n.trim().to_ascii_lowercase())
+            .map(|n| crate::slot_alias(&n.trim().to_ascii_lowercase()).to_owned())
             .collect();
         for (i, name) in names.iter().enumerate() {
             if name.is_empty() {

@@ -94,7 +94,7 @@ pub enum ReadError {
     /// The column names given in [`ReadOptions::columns`](crate::ReadOptions::columns)
     /// (`--columns`) are not as many as the columns of the first data row (XYZ) or the
     /// header (CSV).
-    #[error("{file}: line {line}: {found} columns, but --columns names {named}")]
+    #[error("{file}: line {line}: {found} columns, but {by} names {named}")]
     ColumnsMismatch {
         /// The file.
         file: String,
@@ -104,6 +104,8 @@ pub enum ReadError {
         found: usize,
         /// The names given.
         named: String,
+        /// Where they were given: `--columns`, or the file's own `//` line.
+        by: String,
     },
     /// Column names were given for a PLY or LAS/LAZ file, whose header names its fields.
     #[error(

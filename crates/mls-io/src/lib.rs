@@ -67,6 +67,18 @@ pub use write::{
 /// The fields the readers look for, in the order of the slots of a row.
 const SLOT_NAMES: [&str; 6] = ["x", "y", "z", "nx", "ny", "nz"];
 
+/// The slot name a field name stands for, where writers differ: PCL writes normals as
+/// `normal_x`, `normal_y`, `normal_z` (its PLY and PCD writers), most others as `nx` ….
+/// Lowercase names.
+pub(crate) fn slot_alias(name: &str) -> &str {
+    match name {
+        "normal_x" => "nx",
+        "normal_y" => "ny",
+        "normal_z" => "nz",
+        other => other,
+    }
+}
+
 /// The most points a reader reserves room for before reading them. A header may claim any
 /// count; memory beyond this grows only as points actually arrive.
 const MAX_PREALLOCATED: u64 = 1 << 20;

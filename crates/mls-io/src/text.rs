@@ -4,7 +4,7 @@ use std::borrow::Cow;
 use std::io::BufRead;
 
 use crate::attributes::{Attribute, TextColumn, usable_name};
-use crate::columns::{ReadOptions, UNIT_TOLERANCE};
+use crate::columns::{ColumnNames, ReadOptions, UNIT_TOLERANCE};
 use crate::error::{ReadError, quoted};
 use crate::lines::{Lines, parse_finite};
 use crate::ply::check_normals;
@@ -166,8 +166,27 @@ pub(crate) fn read_xyz_slots(
     let mut cloud = CloudBuilder::new(false, 0);
     let mut check: Option<UnitCheck> = None;
     let mut attributes = TextAttributes::default();
+    // Column names from the file itself: CloudCompare writes them as a comment before the
+    // rows, `//X Y Z Nx Ny Nz`; `--columns` overrides them.
+    let mut named: Option<(ColumnNames, usize)> = None;
     while let Some((line, text)) = lines.next_line(name)? {
         if text.trim_start().starts_with('#') {
+            continue;
+        }
+        if let Some(header) = text.trim_start().strip_prefix("//") {
+            if roles.is_empty() && options.columns.is_none() && named.is_none() {
+                let description = header
+                    .split_ascii_whitespace()
+                    .collect::<Vec<_>>()
+                    .join(",");
+                let columns =
+                    ColumnNames::parse(&description).map_err(|message| ReadError::Header {
+                        file: name.to_owned(),
+                        line,
+                        message: format!("column names after `//`: {message}"),
+                    })?;
+                named = Some((columns, line));
+            }
             continue;
         }
         let found = text.split_ascii_whitespace().count();
@@ -187,7 +206,11 @@ pub(crate) fn read_xyz_slots(
                     found,
                 });
             }
-            roles = match &options.columns {
+            let by = match (&options.columns, &named) {
+                (None, Some((_, at))) => format!("the `//` line {at}"),
+                _ => "--columns".to_owned(),
+            };
+            roles = match options.columns.as_ref().or(named.as_ref().map(|(c, _)| c)) {
                 Some(columns) => {
                     if columns.len() != found {
                         return Err(ReadError::ColumnsMismatch {
@@ -195,6 +218,7 @@ pub(crate) fn read_xyz_slots(
                             line,
                             found,
                             named: columns.to_string(),
+                            by,
                         });
                     }
                     cloud = CloudBuilder::new(columns.has_normals() && slots.len() > 3, 0);
@@ -292,7 +316,7 @@ pub(crate) fn read_xyz_slots(
     let mut notes = Vec::new();
     let width = roles.len();
     let mut normals_found = false;
-    if options.columns.is_none() && width > 3 {
+    if options.columns.is_none() && named.is_none() && width > 3 {
         if let Some(check) = check {
             match check.failed {
                 None if check.any_unit => {
@@ -402,7 +426,17 @@ pub(crate) fn read_csv_slots(
         line: header_line,
         message,
     };
-    let mut names = CsvFields::new(header)
+    // CloudCompare writes its header row as a comment, `//X,Y,Z,...`.
+    let header = header.trim_start();
+    let header = header.strip_prefix("//").unwrap_or(header);
+    // A semicolon separates the fields where the header has it and no comma (spreadsheets in
+    // locales with a decimal comma; an option of CloudCompare's export).
+    let separator = if !header.contains(',') && header.contains(';') {
+        ';'
+    } else {
+        ','
+    };
+    let mut names = CsvFields::new(header, separator)
         .map(|field| field.map(|f| f.trim().to_owned()))
         .collect::<Result<Vec<_>, _>>()
         .map_err(|message| header_error(message.to_owned()))?;
@@ -413,6 +447,7 @@ pub(crate) fn read_csv_slots(
                 line: header_line,
                 found: names.len(),
                 named: columns.to_string(),
+                by: "--columns".to_owned(),
             });
         }
         names = columns.names().to_vec();
@@ -426,7 +461,7 @@ pub(crate) fn read_csv_slots(
     let mut taken = std::collections::HashSet::new();
     let mut present = [false; 6];
     for (column, column_name) in names.iter().enumerate() {
-        let lowercase = column_name.to_ascii_lowercase();
+        let lowercase = crate::slot_alias(&column_name.to_ascii_lowercase()).to_owned();
         let Some(slot) = slots.iter().position(|n| *n == lowercase) else {
             if column_name == "_" && options.columns.is_some() {
                 continue;
@@ -467,7 +502,7 @@ pub(crate) fn read_csv_slots(
     while let Some((line, text)) = lines.next_line(name)? {
         let mut values = [0.0; 6];
         let mut found = 0;
-        for field in CsvFields::new(text) {
+        for field in CsvFields::new(text, separator) {
             let column = found + 1;
             found += 1;
             let field = field.map_err(|message| ReadError::Ascii {
@@ -516,11 +551,15 @@ pub(crate) fn read_csv_slots(
 #[derive(Debug)]
 struct CsvFields<'a> {
     rest: Option<&'a str>,
+    separator: char,
 }
 
 impl<'a> CsvFields<'a> {
-    fn new(line: &'a str) -> Self {
-        Self { rest: Some(line) }
+    fn new(line: &'a str, separator: char) -> Self {
+        Self {
+            rest: Some(line),
+            separator,
+        }
     }
 }
 
@@ -531,7 +570,7 @@ impl<'a> Iterator for CsvFields<'a> {
         let text = self.rest.take()?;
         let Some(mut quoted) = text.trim_start().strip_prefix('"') else {
             // The common case: no quotes, so the field borrows from the line.
-            return Some(Ok(Cow::Borrowed(match text.split_once(',') {
+            return Some(Ok(Cow::Borrowed(match text.split_once(self.separator) {
                 Some((field, rest)) => {
                     self.rest = Some(rest);
                     field
@@ -555,7 +594,7 @@ impl<'a> Iterator for CsvFields<'a> {
             if after.is_empty() {
                 return Some(Ok(Cow::Owned(field)));
             }
-            return match after.strip_prefix(',') {
+            return match after.strip_prefix(self.separator) {
                 Some(rest) => {
                     self.rest = Some(rest);
                     Some(Ok(Cow::Owned(field)))
@@ -571,7 +610,7 @@ mod tests {
     use super::*;
 
     fn fields(line: &str) -> Result<Vec<String>, &'static str> {
-        CsvFields::new(line)
+        CsvFields::new(line, ',')
             .map(|f| f.map(Cow::into_owned))
             .collect()
     }

@@ -97,8 +97,16 @@ fn vertex_layout(
     let mut notes = Vec::new();
     let mut attributes = 0;
     let mut present = [false; 6];
+    let declared = |name: &str| vertex.properties.iter().any(|p| p.name == name);
     for property in &vertex.properties {
-        let slot = slots.iter().position(|&n| n == property.name);
+        // `normal_x` … (PCL's names) stand for `nx` … unless the file also has those.
+        let alias = crate::slot_alias(&property.name);
+        let name = if declared(alias) {
+            &property.name
+        } else {
+            alias
+        };
+        let slot = slots.iter().position(|&n| n == name);
         if let (Some(slot), PropertyKind::List { .. }) = (slot, property.kind) {
             return Err(ReadError::Header {
                 file: file.to_owned(),

@@ -169,3 +169,26 @@ fn zero_length_normals_are_returned_as_read() {
     let cloud = read_ply(file.as_bytes(), "zero.ply").unwrap();
     assert_eq!(cloud.normals, Some(vec![[0.0; 3]]));
 }
+
+#[test]
+fn pcl_normal_names_are_normals_unless_nx_is_there_too() {
+    let header = |props: &str| {
+        format!(
+            "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n\
+             property float z\n{props}end_header\n"
+        )
+    };
+    let pcl = "property float normal_x\nproperty float normal_y\nproperty float normal_z\n\
+               property float curvature\n";
+    let file = header(pcl) + "1 2 3 0 1 0 0.5\n";
+    let cloud = read_ply(file.as_bytes(), "pcl.ply").unwrap();
+    assert_eq!(cloud.normals, Some(vec![[0.0, 1.0, 0.0]]));
+    assert_eq!(cloud.attributes.len(), 1);
+    let both = "property float nx\nproperty float ny\nproperty float nz\n\
+                property float normal_x\nproperty float normal_y\nproperty float normal_z\n";
+    let file = header(both) + "1 2 3 0 0 1 1 0 0\n";
+    let cloud = read_ply(file.as_bytes(), "both.ply").unwrap();
+    assert_eq!(cloud.normals, Some(vec![[0.0, 0.0, 1.0]]));
+    let names: Vec<&str> = cloud.attributes.iter().map(|a| a.name.as_str()).collect();
+    assert_eq!(names, ["normal_x", "normal_y", "normal_z"]);
+}

@@ -65,6 +65,62 @@ fn csv_with_normals() {
     assert_eq!(cloud.normals, Some(vec![[0.0, 0.0, 1.0]]));
 }
 
+#[test]
+fn csv_as_cloudcompare_and_spreadsheets_write_it() {
+    // CloudCompare's header is a comment; PCL names normals normal_x ….
+    let text = "//X,Y,Z,Nx,Ny,Nz\n1,2,3,0,0,1\n";
+    let cloud = read_csv(text.as_bytes(), "cc.csv").unwrap();
+    assert_eq!(cloud.points, [[1.0, 2.0, 3.0]]);
+    assert_eq!(cloud.normals, Some(vec![[0.0, 0.0, 1.0]]));
+    let text = "x;y;z;normal_x;normal_y;normal_z;intensity\n1;2;3;0;1;0;7\n4;5;6;1;0;0;8\n";
+    let cloud = read_csv(text.as_bytes(), "semi.csv").unwrap();
+    assert_eq!(cloud.points, [[1.0, 2.0, 3.0], [4.0, 5.0, 6.0]]);
+    assert_eq!(cloud.normals, Some(vec![[0.0, 1.0, 0.0], [1.0, 0.0, 0.0]]));
+    assert_eq!(cloud.attributes.len(), 1);
+    // A decimal comma with semicolons is not a number: said, not misread.
+    let err = read_csv("x;y;z\n1,5;2;3\n".as_bytes(), "comma.csv").unwrap_err();
+    let message = err.to_string();
+    assert!(
+        message.contains("comma.csv: line 2") && message.contains("\"1,5\""),
+        "{message}"
+    );
+    // With commas in the header, semicolons are part of the fields.
+    assert!(read_csv("x,y,z\n1;2;3\n".as_bytes(), "mixed.csv").is_err());
+}
+
+#[test]
+fn xyz_column_names_from_a_cloudcompare_header() {
+    let text = "//X Y Z Nx Ny Nz\n1 2 3 0 0 1\n4 5 6 0 0 -1\n";
+    let cloud = read_xyz(text.as_bytes(), "cc.txt").unwrap();
+    assert_eq!(cloud.points, [[1.0, 2.0, 3.0], [4.0, 5.0, 6.0]]);
+    assert_eq!(cloud.normals, Some(vec![[0.0, 0.0, 1.0], [0.0, 0.0, -1.0]]));
+    // Named colour columns are attributes, never normals, whatever their values.
+    let cloud = read_xyz("//X Y Z R G B\n1 2 3 1 0 0\n".as_bytes(), "rgb.txt").unwrap();
+    assert_eq!(cloud.normals, None);
+    let names: Vec<&str> = cloud.attributes.iter().map(|a| a.name.as_str()).collect();
+    assert_eq!(names, ["r", "g", "b"]);
+    // --columns overrides the file's names; a later `//` line is a comment.
+    let outcome = read_with(
+        "//X Y Z Nx Ny Nz\n1 2 3 0 0 1\n// end\n",
+        Some("x,y,z,a,b,c"),
+    )
+    .unwrap();
+    assert_eq!(outcome.cloud.normals, None);
+    assert_eq!(outcome.cloud.points, [[1.0, 2.0, 3.0]]);
+    // Names that do not match the rows are an error that says where they came from.
+    let err = read_xyz("//X Y Z Scalar field\n1 2 3 4\n".as_bytes(), "sf.txt").unwrap_err();
+    assert_eq!(
+        err.to_string(),
+        "sf.txt: line 2: 4 columns, but the `//` line 1 names x,y,z,scalar,field"
+    );
+    let err = read_xyz("//X Y W\n1 2 3\n".as_bytes(), "w.txt").unwrap_err();
+    assert!(
+        err.to_string()
+            .starts_with("w.txt: header line 1: column names after `//`"),
+        "{err}"
+    );
+}
+
 // ---------------------------------------------------------------------------------------------
 // Which columns of a headerless file are normals (issue 14).
 
