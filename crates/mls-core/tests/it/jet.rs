@@ -261,3 +261,131 @@ fn a_fit_takes_the_highest_degree_its_equations_determine() {
     }
     assert_eq!(degree(&few_slopes, NormalData::Slopes), Some((2, 10)));
 }
+
+/// One fit at `radius` around the origin in the frame of +z, degree 4 asked.
+fn fit_at(
+    samples: &[mls_core::Sample],
+    radius: f64,
+    normals: NormalData,
+) -> Option<mls_core::jet::JetFit> {
+    use mls_core::jet::{JetScratch, fit, frame};
+    fit(
+        samples,
+        &Point::origin(),
+        &frame(&Vector::z()),
+        radius,
+        4,
+        normals,
+        &mut JetScratch::default(),
+    )
+}
+
+/// `n` samples of the height field `z(u, v)` at random within 0.84 of the axis, with the
+/// normals of `z` (`gradient` gives ∂z/∂u, ∂z/∂v).
+fn height_field(
+    n: usize,
+    seed: u64,
+    z: impl Fn(f64, f64) -> f64,
+    gradient: impl Fn(f64, f64) -> (f64, f64),
+) -> Vec<mls_core::Sample> {
+    use rand::{Rng, SeedableRng};
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+    (0..n)
+        .map(|_| {
+            let (r, t) = (
+                rng.random_range(0.05f64..0.7).sqrt(),
+                rng.random_range(0.0..std::f64::consts::TAU),
+            );
+            let (u, v) = (r * t.cos(), r * t.sin());
+            let (zu, zv) = gradient(u, v);
+            mls_core::Sample {
+                point: Point::new(u, v, z(u, v)),
+                normal: Vector::new(-zu, -zv, 1.0).normalize(),
+            }
+        })
+        .collect()
+}
+
+#[test]
+fn a_fit_counts_only_the_samples_it_weighs_and_whose_normals_face_it() {
+    let plane = |n| height_field(n, SEED, |u, _| 0.1 * u, |_, _| (0.1, 0.0));
+    let degree =
+        |s: &[mls_core::Sample], data| fit_at(s, 1.0, data).map(|f| (f.degree, f.equations));
+    assert_eq!(degree(&plane(22), NormalData::Ignore), Some((3, 22)));
+    // On the support's boundary the weight is 0: not an equation.
+    let mut boundary = plane(22);
+    boundary.push(mls_core::Sample {
+        point: Point::new(1.0, 0.0, 0.0),
+        normal: Vector::z(),
+    });
+    assert_eq!(degree(&boundary, NormalData::Ignore), Some((3, 22)));
+    // A normal at exactly 90° to the frame: another sheet, left out.
+    let mut edge_on = plane(22);
+    edge_on.push(mls_core::Sample {
+        point: Point::new(0.1, 0.2, 0.01),
+        normal: Vector::x(),
+    });
+    assert_eq!(degree(&edge_on, NormalData::Ignore), Some((3, 22)));
+    // A normal at exactly 60° gives a height but no slopes: 7 samples with slopes (21
+    // equations) and this one's height are 22, short of degree 4's 22.5.
+    let mut sixty = plane(7);
+    sixty.push(mls_core::Sample {
+        point: Point::new(0.1, 0.2, 0.01),
+        normal: Vector::new(0.75f64.sqrt(), 0.0, 0.5),
+    });
+    assert_eq!(degree(&sixty, NormalData::Slopes), Some((3, 22)));
+}
+
+#[test]
+fn a_degenerate_layout_falls_back_to_the_degree_it_determines() {
+    // Heights on two circles: (u² + v² − a²)(u² + v² − b²) vanishes on every sample, so
+    // degree 4 is not determined although 40 equations would afford it; degree 3 is. The
+    // cubic is recovered exactly.
+    let cubic = |u: f64, v: f64| 0.3 * u * u - 0.2 * u * v + 0.1 * v * v * v + 0.05 * u * u * u;
+    let samples: Vec<mls_core::Sample> = (0..40)
+        .map(|i| {
+            let r = if i % 2 == 0 { 0.4 } else { 0.75 };
+            let t = 0.37 + i as f64 * std::f64::consts::TAU / 40.0 * 1.7;
+            let (u, v) = (r * t.cos(), r * t.sin());
+            mls_core::Sample {
+                point: Point::new(u, v, cubic(u, v)),
+                normal: Vector::z(),
+            }
+        })
+        .collect();
+    let fit = fit_at(&samples, 1.0, NormalData::Ignore).expect("degree 3 is determined");
+    assert_eq!(fit.degree, 3);
+    let want = [0.0, 0.0, 0.0, 0.3, -0.2, 0.0, 0.05, 0.0, 0.0, 0.1];
+    for (k, (&got, &want)) in fit.coefficients.iter().zip(&want).enumerate() {
+        assert!(
+            (got - want).abs() < 1e-10,
+            "coefficient {k}: {got} vs {want}"
+        );
+    }
+}
+
+#[test]
+fn the_noise_estimate_is_in_the_files_units() {
+    // A plane with heights off by ±σ, alternately: σ̂ ≈ σ whatever the support radius.
+    use rand::{Rng, SeedableRng};
+    let sigma = 0.003;
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(SEED);
+    let radius = 2.5;
+    let samples: Vec<mls_core::Sample> = height_field(400, SEED, |_, _| 0.0, |_, _| (0.0, 0.0))
+        .into_iter()
+        .map(|s| mls_core::Sample {
+            point: Point::new(
+                s.point.x * radius,
+                s.point.y * radius,
+                if rng.random_bool(0.5) { sigma } else { -sigma },
+            ),
+            ..s
+        })
+        .collect();
+    let fit = fit_at(&samples, radius, NormalData::Ignore).unwrap();
+    assert!(
+        (fit.noise / sigma - 1.0).abs() < 0.15,
+        "σ̂ = {} for σ = {sigma}",
+        fit.noise
+    );
+}
