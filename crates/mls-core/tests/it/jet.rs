@@ -389,3 +389,24 @@ fn the_noise_estimate_is_in_the_files_units() {
         fit.noise
     );
 }
+
+#[test]
+fn slopes_asked_where_no_normal_gives_one_is_the_heights_only_fit() {
+    // Every normal more than 60° off the frame: heights only, whatever was asked, and the
+    // same numbers (a slope block of zeros must not switch on the slopes' noise model).
+    let samples: Vec<mls_core::Sample> = height_field(
+        40,
+        SEED,
+        |u, v| 0.2 * u * u - 0.1 * v * v * v,
+        |u, v| (0.4 * u, -0.3 * v * v),
+    )
+    .into_iter()
+    .map(|s| mls_core::Sample {
+        normal: Vector::new(0.9, 0.1, 0.3).normalize(),
+        ..s
+    })
+    .collect();
+    let slopes = fit_at(&samples, 1.0, NormalData::Slopes).unwrap();
+    let heights = fit_at(&samples, 1.0, NormalData::Ignore).unwrap();
+    assert_eq!(slopes, heights);
+}
