@@ -71,6 +71,12 @@ pub fn curvature(a: CurvatureArgs) -> Result<()> {
         });
         // The surface's samples and tree are not needed for writing.
         drop(surface);
+        pipeline::check_any_ok(
+            &out.status,
+            &pipeline::input_name(&a.input),
+            "curvature could be computed",
+            "the status codes are explained by `mlscurv --help`",
+        )?;
         let pos: Vec<[f64; 3]> = match out.projected.take() {
             Some(projected) => projected,
             // Same layout: the positions column reuses the points' buffer.
@@ -401,16 +407,12 @@ pub fn normals(a: NormalsArgs) -> Result<()> {
             )
         })?;
         let (nrm, status) = evaluate::normals_columns(&est.normals);
-        // A file of 0 0 0 normals with exit status 0 would pass a script's check.
-        if !status.is_empty() && status.iter().all(|&s| s != 0) {
-            anyhow::bail!(
-                "{name}: no normal could be estimated at any of its {} points ({}); nothing \
-                 written (points on a line, or fewer than needed for a neighbourhood, have no surface \
-                 normal)",
-                status.len(),
-                pipeline::status_counts(&status)
-            );
-        }
+        pipeline::check_any_ok(
+            &status,
+            &name,
+            "normal could be estimated",
+            "points on a line, or fewer than needed for a neighbourhood, have no surface normal",
+        )?;
         let mut columns = Vec::new();
         columns.extend(vector_columns(["x", "y", "z"], &cloud.points));
         columns.extend(vector_columns(["nx", "ny", "nz"], &nrm));
@@ -472,6 +474,12 @@ pub fn project(a: ProjectArgs) -> Result<()> {
         });
         drop(surface);
         drop(points);
+        pipeline::check_any_ok(
+            &out.status,
+            &pipeline::input_name(&a.input),
+            "projection could be computed",
+            "the status codes are explained by `mlscurv --help`",
+        )?;
         let mut columns = Vec::new();
         columns.extend(vector_columns(["x", "y", "z"], &out.points));
         columns.extend(vector_columns(["nx", "ny", "nz"], &out.normal));

@@ -83,6 +83,19 @@ pub fn with_threads<T: Send>(
     }
 }
 
+/// Refuses a result in which no point succeeded: a file of NaN rows with exit status 0 would
+/// pass a script's check. `what` is the quantity, as in "no {what} at any of its points".
+pub fn check_any_ok(codes: &[i32], name: &str, what: &str, why: &str) -> anyhow::Result<()> {
+    if !codes.is_empty() && codes.iter().all(|&c| c != 0) {
+        anyhow::bail!(
+            "{name}: no {what} at any of its {} points ({}); nothing written ({why})",
+            codes.len(),
+            status_counts(codes)
+        );
+    }
+    Ok(())
+}
+
 /// Counts of each status, in code order.
 pub fn status_counts(codes: &[i32]) -> String {
     let ok = codes.iter().filter(|&&c| c == 0).count();

@@ -363,3 +363,44 @@ fn output_directory_error_names_the_output_and_no_temporary_file() {
     assert!(!r.stderr.contains(".out.csv."), "{}", r.stderr);
     assert_eq!(r.stderr.matches("os error").count(), 1, "{}", r.stderr);
 }
+
+#[test]
+fn a_cloud_where_no_point_succeeds_is_an_error_and_writes_nothing() {
+    // Four points: no support holds enough samples for the jet; with h a hundredth of their
+    // spacing, none for the paper's surface or its projection either. A file of NaN rows with
+    // exit status 0 would pass a script's check.
+    let s = Scene::with(
+        "four.xyz",
+        "0 0 0 0 0 1\n1 0 0 0 0 1\n0 1 0 0 0 1\n1 1 0 0 0 1\n",
+    );
+    let input = s.path("four.xyz");
+    for (args, what) in [
+        (&["curvature"][..], "curvature"),
+        (
+            &["curvature", "--method", "paper", "--h", "0.01"],
+            "curvature",
+        ),
+        (&["project", "--h", "0.01"], "projection"),
+    ] {
+        let r = run(mlscurv()
+            .args(&args[..1])
+            .arg(&input)
+            .arg("-o")
+            .arg(s.path("out.csv"))
+            .args(&args[1..]));
+        assert!(!r.success, "{args:?} succeeded: {}", r.stderr);
+        assert!(!r.stderr.contains("panicked"), "{}", r.stderr);
+        // After any warning, the error.
+        let last = r.stderr.lines().last().unwrap_or_default();
+        let want = format!("no {what} could be computed at any of its 4 points (ok 0, ");
+        assert!(
+            last.starts_with("mlscurv: error:")
+                && last.contains(&input.display().to_string())
+                && last.contains(&want)
+                && last.contains("nothing written"),
+            "{args:?}: {}",
+            r.stderr
+        );
+        s.assert_untouched();
+    }
+}
