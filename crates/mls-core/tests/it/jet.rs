@@ -410,3 +410,23 @@ fn slopes_asked_where_no_normal_gives_one_is_the_heights_only_fit() {
     let heights = fit_at(&samples, 1.0, NormalData::Ignore).unwrap();
     assert_eq!(slopes, heights);
 }
+
+#[test]
+fn an_exact_plane_with_exact_normals_is_flat() {
+    // Every residual is exactly 0, so are both noise estimates: the slopes' weight must not
+    // become 0/0 (a machined face sampled without noise is a real cloud).
+    let plane = height_field(60, SEED, |_, _| 0.0, |_, _| (0.0, 0.0));
+    assert!(
+        plane
+            .iter()
+            .all(|s| s.point.z == 0.0 && s.normal == Vector::z())
+    );
+    let fit = fit_at(&plane, 1.0, NormalData::Slopes).expect("a plane is determined");
+    assert_eq!(fit.degree, 4);
+    assert!(
+        fit.coefficients.iter().all(|&c| c == 0.0),
+        "{:?}",
+        fit.coefficients
+    );
+    assert_eq!(fit.noise, 0.0);
+}
