@@ -430,3 +430,56 @@ fn an_exact_plane_with_exact_normals_is_flat() {
     );
     assert_eq!(fit.noise, 0.0);
 }
+
+#[test]
+fn a_nearly_degenerate_layout_is_judged_by_its_relative_pivot() {
+    // Heights on two circles pulled apart by δ: degree 4 is determined in exact arithmetic,
+    // but with a squared Cholesky pivot below 1e-10 of the largest diagonal entry it is not
+    // trusted (`jet::fit`), and degree 3 is fitted. The pivots are computed here
+    // independently (nalgebra) from the weighted monomials of the samples.
+    use mls_core::jet::MONOMIALS;
+    let layout = |delta: f64| -> Vec<mls_core::Sample> {
+        (0..40)
+            .map(|i| {
+                let t = 0.37 + i as f64 * std::f64::consts::TAU / 40.0 * 1.7;
+                let r = if i % 2 == 0 { 0.4 } else { 0.75 } + delta * (3.0 * t).sin();
+                mls_core::Sample {
+                    point: Point::new(r * t.cos(), r * t.sin(), 0.0),
+                    normal: Vector::z(),
+                }
+            })
+            .collect()
+    };
+    let relative_pivot = |samples: &[mls_core::Sample]| {
+        let mut m = nalgebra::SMatrix::<f64, 15, 15>::zeros();
+        for s in samples {
+            let (u, v) = (s.point.x, s.point.y);
+            let w = (1.0 - u * u - v * v).powi(3);
+            let phi = nalgebra::SVector::<f64, 15>::from_fn(|k, _| {
+                let (i, j) = MONOMIALS[k];
+                u.powi(i) * v.powi(j)
+            });
+            m += phi * phi.transpose() * w;
+        }
+        let l = m.cholesky().expect("positive definite").l();
+        let smallest = (0..15)
+            .map(|i| l[(i, i)] * l[(i, i)])
+            .fold(f64::INFINITY, f64::min);
+        smallest / m.diagonal().max()
+    };
+    let mut below = 0;
+    for k in 0..28 {
+        let delta = 10f64.powf(-(k as f64) / 4.0 - 1.0);
+        let samples = layout(delta);
+        let ratio = relative_pivot(&samples);
+        // Within a factor 2 of the threshold, rounding may decide either way.
+        if (ratio / 1e-10).log2().abs() < 1.0 {
+            continue;
+        }
+        let want = if ratio > 1e-10 { 4 } else { 3 };
+        below += usize::from((1e-12..1e-10).contains(&ratio));
+        let got = fit_at(&samples, 1.0, NormalData::Ignore).map(|f| f.degree);
+        assert_eq!(got, Some(want), "δ = {delta:e}: relative pivot {ratio:e}");
+    }
+    assert!(below > 0, "no layout just below the threshold");
+}
