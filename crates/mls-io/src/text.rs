@@ -169,8 +169,14 @@ pub(crate) fn read_xyz_slots(
     // Column names from the file itself: CloudCompare writes them as a comment before the
     // rows, `//X Y Z Nx Ny Nz`; `--columns` overrides them.
     let mut named: Option<(ColumnNames, usize)> = None;
+    // The last `#` comment before the first row: the names when it has one per column
+    // (mlscurv writes `# x y z nx ny nz k1 ...`).
+    let mut comment: Option<(String, usize)> = None;
     while let Some((line, text)) = lines.next_line(name)? {
-        if text.trim_start().starts_with('#') {
+        if let Some(rest) = text.trim_start().strip_prefix('#') {
+            if roles.is_empty() {
+                comment = Some((rest.to_owned(), line));
+            }
             continue;
         }
         if let Some(header) = text.trim_start().strip_prefix("//") {
@@ -210,6 +216,13 @@ pub(crate) fn read_xyz_slots(
                 (None, Some((_, at))) => format!("the `//` line {at}"),
                 _ => "--columns".to_owned(),
             };
+            if options.columns.is_none() && named.is_none() {
+                named = comment.take().and_then(|(names, at)| {
+                    let tokens: Vec<&str> = names.split_ascii_whitespace().collect();
+                    let columns = ColumnNames::parse(&tokens.join(",")).ok()?;
+                    (tokens.len() == found).then_some((columns, at))
+                });
+            }
             roles = match options.columns.as_ref().or(named.as_ref().map(|(c, _)| c)) {
                 Some(columns) => {
                     if columns.len() != found {

@@ -105,7 +105,7 @@ pub fn read_outcome(
 }
 
 /// The format of data without a file name: PLY, LAS/LAZ or E57 by its magic word, else CSV if the first line
-/// that is not blank or a `#` comment has a comma (its header row), else XYZ.
+/// that is not blank or a `#` comment has a comma or a semicolon (its header row), else XYZ.
 fn sniff(bytes: &[u8]) -> FileFormat {
     if bytes.starts_with(b"ply") {
         return FileFormat::Ply;
@@ -122,7 +122,7 @@ fn sniff(bytes: &[u8]) -> FileFormat {
         .map(<[u8]>::trim_ascii)
         .find(|line| !line.is_empty() && !line.starts_with(b"#"));
     match first {
-        Some(line) if line.contains(&b',') => FileFormat::Csv,
+        Some(line) if line.contains(&b',') || line.contains(&b';') => FileFormat::Csv,
         _ => FileFormat::Xyz,
     }
 }

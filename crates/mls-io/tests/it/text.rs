@@ -121,6 +121,29 @@ fn xyz_column_names_from_a_cloudcompare_header() {
     );
 }
 
+#[test]
+fn xyz_column_names_from_a_comment_that_names_every_column() {
+    // As mlscurv writes XYZ: the names come back, so a result re-read keeps them.
+    let text = "# made by mlscurv\n# x y z nx ny nz k1 status\n1 2 3 0 0 1 0.5 0\n";
+    let cloud = read_xyz(text.as_bytes(), "out.xyz").unwrap();
+    assert_eq!(cloud.normals, Some(vec![[0.0, 0.0, 1.0]]));
+    let names: Vec<&str> = cloud.attributes.iter().map(|a| a.name.as_str()).collect();
+    assert_eq!(names, ["k1", "status"]);
+    // Colour named as such is never taken for normals.
+    let cloud = read_xyz("# X Y Z R G B\n1 2 3 1 0 0\n".as_bytes(), "rgb.xyz").unwrap();
+    assert_eq!(cloud.normals, None);
+    // A comment that is not one name per column, or lacks x y z, is only a comment.
+    for comment in ["# x y z nx ny nz", "# a b c d e f", "# scan of: x y z"] {
+        let text = format!("{comment}\n1 2 3 0 0 1\n");
+        let cloud = read_xyz(text.as_bytes(), "c.xyz").unwrap();
+        assert_eq!(cloud.normals, Some(vec![[0.0, 0.0, 1.0]]), "{comment}");
+        assert!(
+            cloud.attributes.iter().all(|a| a.name.starts_with("col")),
+            "{comment}"
+        );
+    }
+}
+
 // ---------------------------------------------------------------------------------------------
 // Which columns of a headerless file are normals (issue 14).
 
