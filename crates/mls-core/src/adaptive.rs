@@ -474,6 +474,23 @@ pub fn correct_shrinkage(curvature: &Curvature, h: f64) -> Curvature {
 mod tests {
     use super::*;
 
+    #[test]
+    fn the_ladder_runs_from_h_min_by_root_two() {
+        let c = AdaptiveConfig::new(0.5);
+        assert_eq!(c.scale(0), 0.5);
+        assert!((c.scale(3) / c.scale(1) - 2.0).abs() < 1e-15);
+        // Five scales: the largest is 4 h_min, as the summary says.
+        assert!((c.h_max() - 2.0).abs() < 1e-15, "{}", c.h_max());
+        // At least two scales, whatever is asked.
+        for scales in [0, 1, 2] {
+            let c = AdaptiveConfig { scales, ..c };
+            assert!(
+                (c.h_max() - 0.5 * SCALE_RATIO).abs() < 1e-15,
+                "{scales} scales"
+            );
+        }
+    }
+
     /// A grid plane z = 0 with Gaussian noise in z, exact normals: all curvature is noise.
     fn noisy_plane(n: usize, spacing: f64, sigma: f64, seed: u64) -> Vec<Point> {
         // A small LCG + Box–Muller keeps the test free of extra dependencies.
