@@ -40,6 +40,12 @@ const SUPPORT_PROBES: usize = 32;
 /// million points.
 const SUPPORT_SAMPLE: usize = 1 << 16;
 
+/// Fewer other samples than this within 2h of a point, on average, and h is called too small:
+/// the jet needs 6 at a scale, and with fewer the nearest sample alone shapes the MLS surface.
+/// On a uniform sampling of spacing s there are about π(2h/s)² of them: 6 at h ≈ 0.7 s, 50 at
+/// the default h = 2 s.
+const MIN_NEAR_SAMPLES: f64 = 6.0;
+
 /// Samples per evaluation beyond which a run is called slow: the default h gives a few
 /// hundred within the default cutoff (about 35 times fewer).
 const SLOW_SUPPORT: f64 = 10_000.0;
@@ -88,17 +94,22 @@ pub fn check_scale(
     let step = n / probes;
     let stride = n.div_ceil(SUPPORT_SAMPLE);
     let sampled = n.div_ceil(stride);
-    let (mut within_weighty, mut within_support) = (0usize, 0usize);
+    // The weight is e⁻⁴ = 0.018 at 2h: the samples within it carry a fit.
+    let near = 2.0 * h;
+    let (mut within_weighty, mut within_support, mut within_near) = (0usize, 0usize, 0usize);
     for i in 0..probes {
         let q = points[i * step];
         for p in points.iter().step_by(stride) {
             let d2 = (p - q).norm_squared();
             within_weighty += usize::from(d2 <= weighty * weighty);
             within_support += usize::from(support.is_none_or(|r| d2 <= r * r));
+            within_near += usize::from(d2 > 0.0 && d2 <= near * near);
         }
     }
     let fraction = within_weighty as f64 / (probes * sampled) as f64;
-    let per_point = within_support as f64 / probes as f64 * (n as f64 / sampled as f64);
+    let scaled = |count: usize| count as f64 / probes as f64 * (n as f64 / sampled as f64);
+    let per_point = scaled(within_support);
+    let neighbours = scaled(within_near);
     let mut warnings = Vec::new();
     if h > diagonal {
         warnings.push(format!(
@@ -126,6 +137,15 @@ pub fn check_scale(
             }
             Some(_) => w.push_str("; the cloud has too few points for a local fit"),
         }
+    }
+    // (A cloud already too small for h has few samples near any point whatever h is.)
+    if warnings.is_empty() && neighbours < MIN_NEAR_SAMPLES {
+        warnings.push(format!(
+            "h = {h}: a point has on average {neighbours:.1} other samples within 2h = \
+             {near:.6}, where the weight is above 0.018: too few for a fit, so points may fail \
+             and the curvature follows the sampling more than the surface (the default h, 2 × \
+             the median local spacing, has about 50; `mlscurv info` suggests one)"
+        ));
     }
     if per_point > SLOW_SUPPORT {
         warnings.push(format!(

@@ -186,3 +186,26 @@ fn default_h_on_the_bunny_gives_no_warning() {
     );
     assert!(warnings(&r).is_empty(), "{}", r.stderr);
 }
+
+/// The other end: an h well below the spacing leaves each point a sample or two of weight,
+/// and says so; at the spacing itself (about 12 within 2h) it does not.
+#[test]
+fn an_h_below_the_spacing_is_warned_about() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("in.xyz");
+    let n = 20_000;
+    write_unit_sphere(&input, n);
+    let spacing = (4.0 * std::f64::consts::PI / n as f64).sqrt();
+    let out = dir.path().join("out.csv");
+    for (factor, warned) in [(0.4, true), (1.0, false), (2.0, false)] {
+        let h = format!("{}", factor * spacing);
+        let r = curvature(&input, &out, &["-q", "--method", "paper", "--h", &h]);
+        assert!(r.success, "{}", r.stderr);
+        let w = warnings(&r);
+        assert_eq!(w.len(), usize::from(warned), "h = {factor} s: {}", r.stderr);
+        if warned {
+            assert!(w[0].contains("other samples within 2h"), "{}", w[0]);
+            assert!(w[0].contains("too few for a fit"), "{}", w[0]);
+        }
+    }
+}
