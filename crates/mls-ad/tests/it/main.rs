@@ -6,6 +6,7 @@ use mls_core::{Point, Sample, Vector};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
+mod adaptive;
 mod jet;
 
 const SEED: u64 = 0x5eed_0002;
