@@ -474,6 +474,58 @@ pub fn correct_shrinkage(curvature: &Curvature, h: f64) -> Curvature {
 mod tests {
     use super::*;
 
+    /// An estimate of a unit sphere at scale `h`.
+    fn sphere_estimate(h: f64) -> Estimate {
+        let (n, x, y) = (Vector::z(), Vector::x(), Vector::y());
+        Estimate {
+            h,
+            point: Point::new(0.0, 0.0, 1.0),
+            curvature: Curvature {
+                normal: n,
+                k1: 1.0,
+                k2: 1.0,
+                mean: 1.0,
+                gauss: 1.0,
+                d1: x,
+                d2: y,
+            },
+            unit_scatter: 1.0,
+        }
+    }
+
+    #[test]
+    fn a_failure_ends_the_ladder_at_the_scales_before_it_or_tries_larger_ones() {
+        // A scale fails after one estimate: that estimate is chosen, without a partner, and
+        // the point is done (a larger h would only include more of what made this one fail).
+        let mut state = State {
+            estimates: vec![sphere_estimate(0.1)],
+            ..State::default()
+        };
+        advance(&mut state, Err(PointStatus::NormalUndefined), 2.0, false);
+        assert_eq!(
+            (state.chosen, state.partner, state.done),
+            (Some(0), None, true)
+        );
+        assert_eq!(state.failure, None);
+        // After two, the last is chosen and the one before is its partner.
+        let mut state = State {
+            estimates: vec![sphere_estimate(0.1), sphere_estimate(0.14)],
+            ..State::default()
+        };
+        advance(&mut state, Err(PointStatus::GradientVanishes), 2.0, false);
+        assert_eq!(
+            (state.chosen, state.partner, state.done),
+            (Some(1), Some(0), true)
+        );
+        // A failure before any estimate: a larger h may still reach enough samples.
+        let mut state = State::default();
+        advance(&mut state, Err(PointStatus::TooFewNeighbours), 2.0, false);
+        assert_eq!((state.chosen, state.done), (None, false));
+        assert_eq!(state.failure, Some(PointStatus::TooFewNeighbours));
+        advance(&mut state, Err(PointStatus::NoNeighbours), 2.0, true);
+        assert!(state.done);
+    }
+
     #[test]
     fn the_ladder_runs_from_h_min_by_root_two() {
         let c = AdaptiveConfig::new(0.5);
