@@ -107,7 +107,8 @@ fn info_report(a: &InfoArgs, out: &mut String) -> Result<()> {
         let default = if posed == scans.origins.len() {
             "estimated normals face each point's own scanner by default"
         } else {
-            "not every scan has a pose: estimated normals are oriented outward (mst), or up for a sheet seen from above, by default"
+            "not every scan has a pose: estimated normals are oriented outward (mst), or up \
+             for a sheet seen from above, by default"
         };
         println!(
             "scans           {} ({posed} with a pose); {default}",

@@ -17,9 +17,9 @@ pub const UNIT_TOLERANCE: f64 = 1e-3;
 /// such as `x,y,z,nx,ny,nz,intensity`.
 ///
 /// Names are case-insensitive. `x`, `y`, `z` (required) and `nx`, `ny`, `nz` (all three or
-/// none; `normal_x` … as PCL writes them are read as these) are the geometry; any other name (`intensity`, `r`, `g`, `b` …) names an attribute,
-/// carried to the output under that name, and `_` marks a column that is skipped without
-/// being parsed. Each name is letters, digits and `_`, and every name but `_` appears at most
+/// none; `normal_x` … as PCL writes them are read as these) are the geometry; any other name
+/// (`intensity`, `r`, `g`, `b` …) names an attribute, carried to the output under that name,
+/// and `_` marks a column that is skipped without being parsed. Each name is letters, digits and `_`, and every name but `_` appears at most
 /// once.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct ColumnNames(Vec<String>);
