@@ -382,10 +382,12 @@ const MIN_DOF: f64 = 3.0;
 /// [`NOISE_WINDOW`]` · h`, unbiased for independent noise (the residual sum of squares over its
 /// expectation per unit variance); 0 when too few samples.
 ///
-/// The local surface is the quadric `n·d = −½(k1 u² + k2 v²)` of the MLS normal and curvature
-/// at `x` (`u = d1·d`, `v = d2·d`), plus an offset (the query's own distance from the surface)
-/// and the four cubic terms fitted by weighted least squares: on clean data with varying
-/// curvature the cubic terms would otherwise pass for noise and push the scale up.
+/// The residuals are those of a weighted least-squares cubic in the tangent coordinates
+/// (`u = d1·d`, `v = d2·d`; all ten terms: offset, tilt, quadric and cubic) to the heights
+/// `n·d`: on clean data with varying curvature the cubic terms would otherwise pass for noise
+/// and push the scale up. The MLS quadric `−½(k1 u² + k2 v²)` is subtracted from the heights
+/// first; the fit would absorb it anyway (any change of it of degree ≤ 2 leaves σ as it is, up
+/// to rounding), so it only keeps the fitted coefficients small.
 fn residual_noise(ev: &mut crate::surface::Evaluator<'_>, x: &Point, c: &Curvature, h: f64) -> f64 {
     type Basis = nalgebra::SVector<f64, 10>;
     let a = 1.0 / (h * h);
