@@ -529,6 +529,60 @@ mod tests {
     }
 
     #[test]
+    fn samples_on_a_line_give_the_offset_only_noise_estimate() {
+        // A scan line: the cubic in (u, v) is not determined, and σ is the weighted spread of
+        // the heights about their weighted mean, with its own degrees of freedom,
+        // Σw − Σw²/Σw; a line of three samples has too few and gives 0.
+        let h = 0.1;
+        let heights = |i: usize| 0.01 * (((i * 7919) % 13) as f64 / 6.0 - 1.0);
+        let line = |n: usize| -> Vec<Point> {
+            (0..n)
+                .map(|i| Point::new((i as f64 - (n / 2) as f64) * 0.02, 0.0, heights(i)))
+                .collect()
+        };
+        let flat = Curvature {
+            normal: Vector::z(),
+            k1: 0.0,
+            k2: 0.0,
+            mean: 0.0,
+            gauss: 0.0,
+            d1: Vector::x(),
+            d2: Vector::y(),
+        };
+        // With `m` samples in the window, an estimate needs more than MIN_DOF samples' worth
+        // of degrees of freedom, `dof > 3 Σw/m`; lines of 3 to 12 samples cross that bound.
+        let mut near_the_bound = 0;
+        for n in (3..=12).chain([41]) {
+            let points = line(n);
+            let normals = vec![Vector::z(); n];
+            let surface = MlsSurface::new(&points, &normals, MlsConfig::new(h)).unwrap();
+            let mut ev = surface.evaluator();
+            let got = residual_noise(&mut ev, &Point::origin(), &flat, h);
+            let window: Vec<(f64, f64)> = points
+                .iter()
+                .filter(|p| p.coords.norm() <= NOISE_WINDOW * h)
+                .map(|p| ((-p.coords.norm_squared() / (h * h)).exp(), p.z))
+                .collect();
+            let m = window.len() as f64;
+            let sw: f64 = window.iter().map(|(w, _)| w).sum();
+            let mean = window.iter().map(|(w, z)| w * z).sum::<f64>() / sw;
+            let spread: f64 = window.iter().map(|(w, z)| w * (z - mean).powi(2)).sum();
+            let dof = sw - window.iter().map(|(w, _)| w * w).sum::<f64>() / sw;
+            near_the_bound += usize::from(dof > MIN_DOF * sw / m && dof < MIN_DOF + sw / m);
+            if dof > MIN_DOF * sw / m {
+                let want = (spread / dof).sqrt();
+                assert!(
+                    (got - want).abs() < 1e-12 * want,
+                    "{n}: σ {got} against {want}"
+                );
+            } else {
+                assert_eq!(got, 0.0, "{n} samples, {dof} degrees of freedom");
+            }
+        }
+        assert!(near_the_bound > 0);
+    }
+
+    #[test]
     fn the_ladder_runs_from_h_min_by_root_two() {
         let c = AdaptiveConfig::new(0.5);
         assert_eq!(c.scale(0), 0.5);
