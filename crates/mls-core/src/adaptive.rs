@@ -583,6 +583,42 @@ mod tests {
     }
 
     #[test]
+    fn the_shrinkage_correction_undoes_the_parallel_surface() {
+        // A surface of curvatures 2 and 0.5 seen through an MLS surface of scale h lying
+        // δ = (k1 + k2) h²/4 inside it, whose curvatures are k/(1 − kδ).
+        let h = 0.1;
+        let (k1, k2) = (2.0, 0.5);
+        let delta = (k1 + k2) * h * h / 4.0;
+        let (m1, m2) = (k1 / (1.0 - k1 * delta), k2 / (1.0 - k2 * delta));
+        let measured = Curvature {
+            normal: Vector::z(),
+            k1: m1,
+            k2: m2,
+            mean: 0.5 * (m1 + m2),
+            gauss: m1 * m2,
+            d1: Vector::x(),
+            d2: Vector::y(),
+        };
+        let c = correct_shrinkage(&measured, h);
+        // First order (δ is taken from the measured curvatures): all but O((kδ)²) of the
+        // shrinkage's bias goes.
+        for (got, want, measured) in [(c.k1, k1, m1), (c.k2, k2, m2)] {
+            assert!(
+                (got - want).abs() < 0.05 * (measured - want).abs(),
+                "{got} against {want} (measured {measured})"
+            );
+        }
+        // Exactly the documented formula, and a consistent result.
+        let d = 0.5 * measured.mean * h * h;
+        assert_eq!((c.k1, c.k2), (m1 / (1.0 + m1 * d), m2 / (1.0 + m2 * d)));
+        assert_eq!((c.mean, c.gauss), (0.5 * (c.k1 + c.k2), c.k1 * c.k2));
+        assert_eq!(
+            (c.normal, c.d1, c.d2),
+            (measured.normal, measured.d1, measured.d2)
+        );
+    }
+
+    #[test]
     fn the_ladder_runs_from_h_min_by_root_two() {
         let c = AdaptiveConfig::new(0.5);
         assert_eq!(c.scale(0), 0.5);
