@@ -343,7 +343,7 @@ fn finish(state: &State) -> AdaptiveResult {
         let bias = |a: f64, b: f64| ha2 * (b - a) / (hb2 - ha2);
         let b1 = bias(chosen.curvature.k1, partner.curvature.k1);
         let b2 = bias(chosen.curvature.k2, partner.curvature.k2);
-        if b1.abs().max(b2.abs()) > 2.0 * scatter && (hb2 - ha2).abs() > 0.0 {
+        if b1.abs().max(b2.abs()) > 2.0 * scatter {
             let (k1, k2) = (curvature.k1 - b1, curvature.k2 - b2);
             // Extrapolation keeps the order except near umbilics; if it swaps them, the
             // directions follow, keeping d1 × d2 = normal.
