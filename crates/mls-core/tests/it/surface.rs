@@ -84,6 +84,12 @@ fn statuses_instead_of_numbers() {
     let near_mid = ev.curvature_at(&Point::new(0.2, 0.2, 4e-9));
     assert_eq!(near_mid.err(), Some(PointStatus::NormalUndefined));
     assert!(ev.curvature_at(&Point::new(0.2, 0.2, 5e-3)).is_ok());
+    // The projection's line direction is the same normal field, with the same test of the
+    // ratio (on the samples gathered for its whole line search).
+    assert_eq!(
+        ev.project(&Point::new(0.2, 0.2, 4e-9)).err(),
+        Some(PointStatus::NormalUndefined)
+    );
 
     // A single point, and fewer than the minimum number of neighbours.
     let single = MlsSurface::new(&[Point::origin()], &[Vector::z()], MlsConfig::new(1.0)).unwrap();
