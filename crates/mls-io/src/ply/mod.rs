@@ -97,11 +97,13 @@ fn vertex_layout(
     let mut notes = Vec::new();
     let mut attributes = 0;
     let mut present = [false; 6];
-    let declared = |name: &str| vertex.properties.iter().any(|p| p.name == name);
+    // `normal_x` … (PCL's names) stand for `nx` … unless the file also has those. (A set: a
+    // header may declare 10⁵ properties.)
+    let declared: std::collections::HashSet<&str> =
+        vertex.properties.iter().map(|p| p.name.as_str()).collect();
     for property in &vertex.properties {
-        // `normal_x` … (PCL's names) stand for `nx` … unless the file also has those.
         let alias = crate::slot_alias(&property.name);
-        let name = if declared(alias) {
+        let name = if alias != property.name && declared.contains(alias) {
             &property.name
         } else {
             alias
