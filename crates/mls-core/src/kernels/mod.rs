@@ -172,3 +172,29 @@ impl Avx2 {
         std::arch::is_x86_feature_detected!("avx2").then_some(Self(()))
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Both paths give the same bits, so no result shows which ran: `validate` forces the
+    /// portable one per thread to compare them, and reports the name. Both must do as told.
+    #[test]
+    fn the_portable_kernels_can_be_forced_per_thread() {
+        #[cfg(target_arch = "x86_64")]
+        let best = if std::arch::is_x86_feature_detected!("avx2") {
+            "avx2"
+        } else {
+            "baseline"
+        };
+        #[cfg(not(target_arch = "x86_64"))]
+        let best = "baseline";
+        assert_eq!(kernel_isa(), best);
+        set_portable_kernels(true);
+        assert_eq!(kernel_isa(), "baseline");
+        // Another thread is not affected.
+        assert_eq!(std::thread::spawn(kernel_isa).join().unwrap(), best);
+        set_portable_kernels(false);
+        assert_eq!(kernel_isa(), best);
+    }
+}
