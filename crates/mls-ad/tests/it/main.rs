@@ -8,6 +8,7 @@ use rand_chacha::ChaCha8Rng;
 
 mod adaptive;
 mod jet;
+mod line;
 
 const SEED: u64 = 0x5eed_0002;
 

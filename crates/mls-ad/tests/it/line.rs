@@ -1,0 +1,52 @@
+//! The projection's line derivatives e′(t), e″(t) (`projection::line_derivatives`, the code
+//! the line search runs) against the hyper-dual derivatives of the energy along the line
+//! (`mls_ad::line_witness`), at t away from 0: the quick version of `validate`'s line rows.
+//! At t = 0 the terms in t vanish, so a test that only looked at the line's origin (as every
+//! converged projection does) could not see them.
+
+use mls_core::projection::line_derivatives;
+use mls_core::{Point, Vector};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+use super::{cloud, rel};
+
+#[test]
+fn line_derivatives_away_from_the_origin_match_the_witness() {
+    let mut rng = ChaCha8Rng::seed_from_u64(0x5eed_0111);
+    let mut worst = [0.0f64; 2];
+    for case in 0..40 {
+        let samples = cloud(&mut rng, 60);
+        let h = rng.random_range(0.05..0.3);
+        let a = 1.0 / (h * h);
+        let x = Point::new(
+            rng.random_range(-0.1..0.1),
+            rng.random_range(-0.1..0.1),
+            1.0 + rng.random_range(-0.5..0.5) * h,
+        );
+        let n = Vector::new(
+            rng.random_range(-0.3..0.3),
+            rng.random_range(-0.3..0.3),
+            1.0,
+        )
+        .normalize();
+        // |t| from h/4 to h, either side: the t and t² terms of the squared distance matter.
+        let t = rng.random_range(0.25..1.0) * h * if case % 2 == 0 { 1.0 } else { -1.0 };
+        let p = line_derivatives(&x, &n, &samples, a, t);
+        let w = mls_ad::line_witness(&x.coords, &n, &samples, a, t);
+        let rescale = (w.log_scale - p.log_scale).exp();
+        let errs = [
+            rel(p.first * rescale, w.first, w.first_scale),
+            rel(p.second * rescale, w.second, w.second_scale),
+        ];
+        for (k, e) in errs.iter().enumerate() {
+            worst[k] = worst[k].max(*e);
+            assert!(
+                *e < 1e-10,
+                "case {case}: line derivative {} differs by {e:e} (t = {t}, h = {h})",
+                k + 1
+            );
+        }
+    }
+    eprintln!("worst relative differences e', e'': {worst:?}");
+}
