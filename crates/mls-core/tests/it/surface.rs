@@ -90,6 +90,27 @@ fn statuses_instead_of_numbers() {
         ev.project(&Point::new(0.2, 0.2, 4e-9)).err(),
         Some(PointStatus::NormalUndefined)
     );
+    // Sheets 1.5h apart, where a projection given a direction walks to a sheet (it does from
+    // 1e-3 off the mid-plane). At δ = 4e-9, |Σwv|/Σw is 1.5e-7 (below the threshold) while
+    // |Σwv|·Σw is 9e-5: a test of the product, or of |Σwv| against 1e-6/Σw, would let the
+    // projection walk on a direction that is rounding noise. Here the curvature path's own
+    // test of the ratio cannot stand in for the projection's, as it did above: the walk ends
+    // on the sheet, where the field is defined.
+    let mut apart: Vec<Point> = Vec::new();
+    let mut apart_n: Vec<Vector> = Vec::new();
+    for k in 0..400 {
+        let (x, y) = ((k % 20) as f64 * 0.02, (k / 20) as f64 * 0.02);
+        apart.extend([Point::new(x, y, 0.03), Point::new(x, y, -0.03)]);
+        apart_n.extend([Vector::z(), -Vector::z()]);
+    }
+    let apart = MlsSurface::new(&apart, &apart_n, MlsConfig::new(0.04)).unwrap();
+    let mut ev = apart.evaluator();
+    assert_eq!(
+        ev.project(&Point::new(0.2, 0.2, 4e-9)).err(),
+        Some(PointStatus::NormalUndefined)
+    );
+    let walked = ev.project(&Point::new(0.2, 0.2, 1e-3)).unwrap().point;
+    assert!(walked.z > 0.03, "projected to {walked:?}");
 
     // A single point, and fewer than the minimum number of neighbours.
     let single = MlsSurface::new(&[Point::origin()], &[Vector::z()], MlsConfig::new(1.0)).unwrap();
