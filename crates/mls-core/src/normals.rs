@@ -30,7 +30,7 @@ pub use estimate::{
 pub use graph::NeighbourGraph;
 pub use orient::{
     Facing, Orientation, OrientationReport, orient_normals, orient_normals_towards,
-    orientation_consistency,
+    orientation_consistency, sampled_consistency,
 };
 pub use spacing::{
     DEFAULT_H_FACTOR, DEFAULT_SPACING_NEIGHBOURS, DistanceStats, SpacingStats, spacing_statistics,

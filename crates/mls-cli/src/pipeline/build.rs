@@ -12,8 +12,8 @@ use mls_core::{
 use mls_io::PointCloud;
 
 use super::{
-    Carried, MIN_POINTS, Normals, Scale, Timings, check_scale, choose_h_on, input_name, normals,
-    print_warning, read, scan_viewpoints,
+    Carried, MIN_POINTS, Normals, Scale, Timings, check_file_normals, check_scale, choose_h_on,
+    input_name, normals, print_warning, read, scan_viewpoints,
 };
 use crate::{Format, SurfaceOptions};
 
@@ -38,6 +38,12 @@ pub fn eval_surface(
         warn(w);
     }
     let normals: Vec<Vector> = normals.iter().map(|n| Vector::from(*n)).collect();
+    let check = t.time("normals", || {
+        check_file_normals(&cloud, |i| Some(normals[i]), file)
+    });
+    if let Some(w) = check {
+        warn(w);
+    }
     let surface = t.time("index", || {
         fixed_surface(cloud, &normals, scale.h, cutoff).with_context(|| file.to_owned())
     })?;
@@ -191,6 +197,14 @@ pub fn build_surface<S>(
             file,
         )
     })?;
+    if from_file {
+        let check = t.time("normals", || {
+            check_file_normals(&cloud, |i| normals[i], file)
+        });
+        if let Some(w) = check {
+            warn(w);
+        }
+    }
     let surface = t.time("index", || {
         surface(cloud, points, normals, scale.h, s.cutoff, file, build)
     })?;

@@ -12,6 +12,7 @@ mod curvature_bunny;
 mod e57;
 mod eval;
 mod eval_options;
+mod file_normals;
 mod help_flag;
 mod info;
 mod large_h;

@@ -7,8 +7,8 @@
 mod checks;
 mod tree;
 
-pub use checks::orientation_consistency;
 use checks::{consistency_of, facing_of};
+pub use checks::{orientation_consistency, sampled_consistency};
 use tree::orient_along_tree;
 
 use super::{NeighbourGraph, NormalEstimate, NormalsError, check_points};

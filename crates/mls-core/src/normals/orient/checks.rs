@@ -2,7 +2,12 @@
 //! in sign, and, for the voting rules, how many normals face their line of sight. Kept apart
 //! from the traversal because they judge its result and never change it.
 
+use std::num::NonZeroUsize;
+
+use kiddo::SquaredEuclidean;
+
 use super::{Facing, Rule, check_lengths, is_canonical};
+use crate::cloud::IndexedCloud;
 use crate::math::{Point, Vector};
 use crate::normals::{NeighbourGraph, NormalsError};
 use crate::surface::Parallelism;
@@ -25,6 +30,50 @@ pub fn orientation_consistency(
             .filter(|v| v.iter().all(|c| c.is_finite()) && v.norm_squared() > 0.0)
             .copied()
     }))
+}
+
+/// [`orientation_consistency`] estimated without building the whole graph: over at most
+/// `max_points` points spread evenly over `cloud`'s storage order (a Morton order, so they
+/// cover the whole cloud), each against its `k` nearest neighbours, pairs counted from the
+/// sampled side. `normal(i)` is the normal of input point `i`, `None` where it has none. For
+/// checking normals read from a file at a small fraction of the graph's cost: 20,000 points
+/// give the fraction to about ±0.1 % near 99 %. `None` when no pair has two normals.
+pub fn sampled_consistency<F>(
+    cloud: &IndexedCloud<'_>,
+    k: usize,
+    max_points: usize,
+    par: Parallelism,
+    normal: F,
+) -> Option<f64>
+where
+    F: Fn(usize) -> Option<Vector> + Sync,
+{
+    let n = cloud.len();
+    let wanted = NonZeroUsize::new(k.min(n.saturating_sub(1)) + 1)?;
+    let m = n.min(max_points);
+    let count = |j: usize| -> (usize, usize) {
+        // Evenly spaced stored points; j·n/m < n and, for m = n, every point once.
+        let s = (j as u128 * n as u128 / m as u128) as usize;
+        let i = cloud.order[s] as usize;
+        let Some(ni) = normal(i) else {
+            return (0, 0);
+        };
+        cloud
+            .tree
+            .query(&cloud.local(s))
+            .nearest_n::<SquaredEuclidean<f64>>(wanted)
+            .execute()
+            .iter()
+            .map(|hit| cloud.order[hit.item as usize] as usize)
+            .filter(|&other| other != i)
+            .filter_map(&normal)
+            .fold((0, 0), |(all, agree), nj| {
+                (all + 1, agree + usize::from(ni.dot(&nj) > 0.0))
+            })
+    };
+    let add = |a: (usize, usize), b: (usize, usize)| (a.0 + b.0, a.1 + b.1);
+    let (all, agree) = par.sum(m, 256, (0, 0), count, add);
+    (all > 0).then(|| agree as f64 / all as f64)
 }
 
 pub(super) fn consistency_of<F>(graph: &NeighbourGraph, par: Parallelism, normal: F) -> Option<f64>

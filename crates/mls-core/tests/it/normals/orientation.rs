@@ -199,3 +199,77 @@ fn consistency_detects_flips_and_matches_the_report() {
         Some(1.0)
     );
 }
+
+/// The sampled consistency against brute force: every point's k nearest by sorting all
+/// distances, the pairs whose normals agree counted from each sampled point.
+#[test]
+fn sampled_consistency_counts_the_pairs_of_the_sampled_points() {
+    use mls_core::IndexedCloud;
+    use mls_core::normals::sampled_consistency;
+    use rand::{Rng, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    let mut rng = ChaCha8Rng::seed_from_u64(FLIP_SEED);
+    // Random points (no ties in distance), a fifth of the normals flipped, some missing.
+    let n = 600;
+    let points: Vec<Point> = (0..n)
+        .map(|_| Point::new(rng.random(), rng.random(), 0.1 * rng.random::<f64>()))
+        .collect();
+    let normals: Vec<Option<Vector>> = (0..n)
+        .map(|i| {
+            let sign = if rng.random_bool(0.2) { -1.0 } else { 1.0 };
+            (i % 17 != 3).then(|| Vector::new(0.1, -0.2, sign).normalize())
+        })
+        .collect();
+    let k = 8;
+    let brute = |sampled: &[usize]| -> f64 {
+        let (mut all, mut agree) = (0, 0);
+        for &i in sampled {
+            let Some(ni) = normals[i] else { continue };
+            let mut by_distance: Vec<usize> = (0..n).filter(|&j| j != i).collect();
+            by_distance.sort_by(|&a, &b| {
+                (points[a] - points[i])
+                    .norm_squared()
+                    .total_cmp(&(points[b] - points[i]).norm_squared())
+            });
+            for &j in &by_distance[..k] {
+                if let Some(nj) = normals[j] {
+                    all += 1;
+                    agree += usize::from(ni.dot(&nj) > 0.0);
+                }
+            }
+        }
+        agree as f64 / all as f64
+    };
+    let cloud = IndexedCloud::new(&points, PAR).unwrap();
+    let normal = |i: usize| normals[i];
+    // Every point, in either parallelism: the whole cloud's pairs.
+    let all: Vec<usize> = (0..n).collect();
+    let want = brute(&all);
+    assert!((0.6..0.75).contains(&want), "a fifth flipped: {want}");
+    for par in [SEQ, PAR] {
+        let got = sampled_consistency(&cloud, k, n, par, normal).unwrap();
+        assert!((got - want).abs() < 1e-15, "{got} against {want}");
+        assert_eq!(
+            sampled_consistency(&cloud, k, 10 * n, par, normal),
+            Some(got)
+        );
+    }
+    // A tenth of the points, spread over the storage order: an estimate of the whole's share
+    // (480 pairs: a standard error of about 0.02).
+    let some = sampled_consistency(&cloud, k, n / 10, PAR, normal).unwrap();
+    assert!((some - want).abs() < 0.1, "{some} against {want}");
+    // No pair with two normals, or no pair at all.
+    assert_eq!(sampled_consistency(&cloud, k, n, PAR, |_| None), None);
+    let one = [Point::origin()];
+    let single = IndexedCloud::new(&one, PAR).unwrap();
+    assert_eq!(
+        sampled_consistency(&single, k, 10, PAR, |_| Some(Vector::z())),
+        None
+    );
+    // Agreement is the sign of the dot product, not its size: unit or not, all agree.
+    assert_eq!(
+        sampled_consistency(&cloud, k, n, PAR, |i| Some(Vector::z() * (1.0 + i as f64))),
+        Some(1.0)
+    );
+}
