@@ -42,6 +42,15 @@ pub enum InputError {
         /// Index of the first offending point.
         index: usize,
     },
+    /// A point has a coordinate beyond ±[`MAX_COORDINATE`]: squared distances between such
+    /// points overflow to infinity, and no spacing or weight can be formed from them.
+    #[error(
+        "point {index} has a coordinate beyond ±1e153, where squared distances between points overflow"
+    )]
+    CoordinateTooLarge {
+        /// Index of the first offending point.
+        index: usize,
+    },
     /// The cloud is larger than the k-d tree (u32 item indices) supports.
     #[error("too many points for the spatial index: {0} (at most {max})", max = u32::MAX)]
     TooManyPoints(usize),
@@ -55,16 +64,28 @@ pub enum InputError {
     },
 }
 
+/// The largest coordinate magnitude accepted: the difference of two such coordinates, squared
+/// and summed over three axes (1.2e307), stays below `f64::MAX` (1.8e308). Far beyond any
+/// scan, and above the largest h (1e150), so every accepted h has clouds it can serve.
+pub const MAX_COORDINATE: f64 = 1e153;
+
 /// Checks a cloud for the spatial index: at most `u32::MAX` points, every coordinate finite
-/// (the first offending point is named).
+/// and within ±[`MAX_COORDINATE`] (the first offending point is named).
 ///
 /// # Errors
-/// [`InputError::TooManyPoints`] or [`InputError::NonFinitePoint`].
+/// [`InputError::TooManyPoints`], [`InputError::NonFinitePoint`] or
+/// [`InputError::CoordinateTooLarge`].
 pub fn check_points(points: &[crate::Point]) -> Result<(), InputError> {
     if points.len() > u32::MAX as usize {
         return Err(InputError::TooManyPoints(points.len()));
     }
-    match points.iter().position(|p| !p.iter().all(|c| c.is_finite())) {
+    match points
+        .iter()
+        .position(|p| !p.iter().all(|c| c.abs() <= MAX_COORDINATE))
+    {
+        Some(index) if points[index].iter().all(|c| c.is_finite()) => {
+            Err(InputError::CoordinateTooLarge { index })
+        }
         Some(index) => Err(InputError::NonFinitePoint { index }),
         None => Ok(()),
     }

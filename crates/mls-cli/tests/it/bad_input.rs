@@ -404,3 +404,15 @@ fn a_cloud_where_no_point_succeeds_is_an_error_and_writes_nothing() {
         s.assert_untouched();
     }
 }
+
+#[test]
+fn a_coordinate_whose_squared_distances_overflow_is_named() {
+    let text = "0 0 0\n1 0 0\n0 1 0\n1 1 0\n0.5 0.5 1e300\n2 2 0\n";
+    let s = Scene::with("in.xyz", text);
+    // Point 4 counted from 0: the fifth row.
+    s.assert_error(
+        &s.curvature("in.xyz", &[]),
+        &s.path("in.xyz"),
+        &["point 4", "beyond ±1e153", "overflow"],
+    );
+}

@@ -92,6 +92,29 @@ fn extreme_coordinates_do_not_panic() {
         fibonacci_sphere(50, Point::origin(), 1e-150),
         fibonacci_sphere(50, Point::new(1e15, 0.0, 0.0), 1e-3),
     ];
+    // Squared distances between the first cloud's points overflow: refused, naming the point.
+    assert_eq!(
+        estimate_normals(&clouds[0], &NormalsConfig::default(), PAR).err(),
+        Some(NormalsError::Input(InputError::CoordinateTooLarge {
+            index: 0
+        }))
+    );
+    let mut near_limit = clouds[0].clone();
+    near_limit[0].x = 1e153;
+    near_limit[1].x = -1e153;
+    assert!(mls_core::check_points(&near_limit).is_ok());
+    near_limit[1].x = -1.0000000000000002e153;
+    assert_eq!(
+        mls_core::check_points(&near_limit),
+        Err(InputError::CoordinateTooLarge { index: 1 })
+    );
+    // A non-finite coordinate is named as such, also after a large one.
+    near_limit[2].z = f64::NAN;
+    near_limit[1].x = 0.0;
+    assert_eq!(
+        mls_core::check_points(&near_limit),
+        Err(InputError::NonFinitePoint { index: 2 })
+    );
     for points in &clouds {
         for orientation in [
             Orientation::Outward,
