@@ -68,13 +68,14 @@ pub use write::{
 const SLOT_NAMES: [&str; 6] = ["x", "y", "z", "nx", "ny", "nz"];
 
 /// The slot name a field name stands for, where writers differ: PCL writes normals as
-/// `normal_x`, `normal_y`, `normal_z` (its PLY and PCD writers), most others as `nx` ….
-/// Lowercase names.
+/// `normal_x`, `normal_y`, `normal_z` (its PLY and PCD writers), PDAL as `NormalX`, `NormalY`,
+/// `NormalZ` (its dimension names, lowercased here by the text and LAS readers), most others as
+/// `nx` …. Lowercase names.
 pub(crate) fn slot_alias(name: &str) -> &str {
     match name {
-        "normal_x" => "nx",
-        "normal_y" => "ny",
-        "normal_z" => "nz",
+        "normal_x" | "normalx" => "nx",
+        "normal_y" | "normaly" => "ny",
+        "normal_z" | "normalz" => "nz",
         other => other,
     }
 }

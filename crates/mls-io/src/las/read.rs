@@ -110,7 +110,7 @@ impl LasReader {
         for e in &extras {
             let end = e.offset + e.size;
             described = described.max(end);
-            if normal_offsets.is_some() && matches!(e.name.as_str(), "nx" | "ny" | "nz") {
+            if normal_offsets.is_some_and(|o| o.contains(&e.offset)) {
                 continue;
             }
             let Some(ty) = e.ty else {
@@ -340,12 +340,19 @@ where
 }
 
 /// Offsets within each point's extra bytes of `f64` attributes named `nx`, `ny`, `nz` (as
-/// `mlscurv` writes them), when the Extra Bytes VLR declares all three.
+/// `mlscurv` writes them) or, when those are absent, by one of their aliases in any case
+/// (`NormalX` …, as PDAL writes them with `extra_dims`), when the Extra Bytes VLR declares
+/// all three.
 fn normal_offsets(extras: &[ExtraField]) -> Option<[usize; 3]> {
-    let find = |n: &str| {
+    let f64s = || {
         extras
             .iter()
-            .find(|e| e.name == n && e.ty == Some(crate::AttributeType::F64))
+            .filter(|e| e.ty == Some(crate::AttributeType::F64))
+    };
+    let find = |n: &str| {
+        f64s()
+            .find(|e| e.name == n)
+            .or_else(|| f64s().find(|e| crate::slot_alias(&e.name.to_ascii_lowercase()) == n))
             .map(|e| e.offset)
     };
     Some([find("nx")?, find("ny")?, find("nz")?])

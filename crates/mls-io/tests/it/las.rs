@@ -380,3 +380,42 @@ fn normals_written_as_extra_bytes_are_read_back() {
         assert_eq!(cloud.normals.as_deref(), Some(&normals[..]), "{name}");
     }
 }
+
+/// PDAL writes the normals of `filters.normal` as the extra bytes `NormalX`, `NormalY`,
+/// `NormalZ` (with `extra_dims`): they are the cloud's normals too, and not also carried as
+/// attributes; `nx ny nz` win when a file has both.
+#[test]
+fn pdal_normal_dimensions_are_normals() {
+    let table = Table::new();
+    let normals: Vec<[f64; 3]> = table
+        .points
+        .iter()
+        .map(|p| {
+            let len = (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt();
+            [p[0] / len, p[1] / len, p[2] / len]
+        })
+        .collect();
+    let flipped: Vec<[f64; 3]> = normals.iter().map(|n| n.map(|c| -c)).collect();
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("pdal.las");
+    let mut columns = table.columns();
+    let attributes_before = {
+        mls_io::write_point_cloud(&path, &columns, mls_io::PlyFormat::BinaryLittleEndian).unwrap();
+        mls_io::read_point_cloud(&path).unwrap().attributes.len()
+    };
+    columns.push(Column::component("NormalX", &normals, Axis::X));
+    columns.push(Column::component("NormalY", &normals, Axis::Y));
+    columns.push(Column::component("NormalZ", &normals, Axis::Z));
+    mls_io::write_point_cloud(&path, &columns, mls_io::PlyFormat::BinaryLittleEndian).unwrap();
+    let cloud = mls_io::read_point_cloud(&path).unwrap();
+    assert_eq!(cloud.normals.as_deref(), Some(&normals[..]));
+    assert_eq!(cloud.attributes.len(), attributes_before);
+    // Both spellings: `nx ny nz` are the normals, the others stay attributes.
+    columns.push(Column::component("nx", &flipped, Axis::X));
+    columns.push(Column::component("ny", &flipped, Axis::Y));
+    columns.push(Column::component("nz", &flipped, Axis::Z));
+    mls_io::write_point_cloud(&path, &columns, mls_io::PlyFormat::BinaryLittleEndian).unwrap();
+    let cloud = mls_io::read_point_cloud(&path).unwrap();
+    assert_eq!(cloud.normals.as_deref(), Some(&flipped[..]));
+    assert_eq!(cloud.attributes.len(), attributes_before + 3);
+}

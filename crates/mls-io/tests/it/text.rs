@@ -77,6 +77,12 @@ fn csv_as_cloudcompare_and_spreadsheets_write_it() {
     assert_eq!(cloud.points, [[1.0, 2.0, 3.0], [4.0, 5.0, 6.0]]);
     assert_eq!(cloud.normals, Some(vec![[0.0, 1.0, 0.0], [1.0, 0.0, 0.0]]));
     assert_eq!(cloud.attributes.len(), 1);
+    // PDAL's `writers.text` names dimensions as PDAL does: `NormalX` ….
+    let text = "\"X\",\"Y\",\"Z\",\"NormalX\",\"NormalY\",\"NormalZ\"\n1,2,3,0,0,1\n";
+    let cloud = read_csv(text.as_bytes(), "pdal.csv").unwrap();
+    assert_eq!(cloud.points, [[1.0, 2.0, 3.0]]);
+    assert_eq!(cloud.normals, Some(vec![[0.0, 0.0, 1.0]]));
+    assert!(cloud.attributes.is_empty());
     // A decimal comma with semicolons is not a number: said, not misread.
     let err = read_csv("x;y;z\n1,5;2;3\n".as_bytes(), "comma.csv").unwrap_err();
     let message = err.to_string();
