@@ -277,6 +277,9 @@ mod tests {
         // The minimum at 1.6 h lies beyond reach; at 1.4 h it is found.
         assert_eq!(walk(|t| (2.0 * (t - 3.2), 2.0), 0.0, 2.0).0, None);
         assert!(walk(|t| (2.0 * (t - 2.8), 2.0), 0.0, 2.0).0.is_some());
+        // Newton steps of 1e-9 h that never reach a sign change: the walk gives up after
+        // MAX_WALK_STEPS of them rather than crawl the 1.5 h (10⁹ steps).
+        assert_eq!(walk(|_| (-1e-6, 1e3), 0.0, 1.0), (None, MAX_WALK_STEPS + 1));
         for bad in [f64::NAN, f64::INFINITY] {
             assert_eq!(walk(|_| (bad, 1.0), 0.0, 1.0), (None, 1));
             assert_eq!(walk(|_| (1.0, bad), 0.0, 1.0), (None, 1));
