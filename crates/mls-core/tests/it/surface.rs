@@ -228,3 +228,35 @@ fn cutoff_cost() {
     }
     assert!(worst.windows(2).all(|p| p[0] > p[1]), "{worst:?}");
 }
+
+/// The support is closed, `|x − q| ≤ r`, in both instruction sets: a sample exactly on its
+/// boundary is loaded (its weight exp(−25) at the default cutoff 5h still counts at 1e-11),
+/// the next double beyond it is not.
+#[test]
+fn a_sample_on_the_support_boundary_is_loaded() {
+    use mls_core::Sample;
+    use mls_core::field::FieldScratch;
+    use mls_core::kernels::set_portable_kernels;
+
+    let sample = |x: f64| Sample {
+        point: Point::new(x, 0.0, 0.0),
+        normal: Vector::z(),
+    };
+    let samples = [
+        sample(0.5),
+        sample(3.0),
+        sample(3.0f64.next_up()),
+        sample(-4.0),
+    ];
+    for portable in [false, true] {
+        set_portable_kernels(portable);
+        let mut scratch = FieldScratch::default();
+        assert_eq!(scratch.load(&Point::origin(), &samples, 9.0, 1.0), 2);
+        assert_eq!(scratch.load(&Point::origin(), &samples, 16.0, 1.0), 4);
+        assert_eq!(
+            scratch.load(&Point::origin(), &samples, f64::INFINITY, 1.0),
+            4
+        );
+    }
+    set_portable_kernels(false);
+}
