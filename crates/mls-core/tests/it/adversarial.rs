@@ -276,6 +276,7 @@ fn non_finite_input_is_a_typed_error_naming_the_point() {
 #[test]
 fn empty_and_single_point_clouds_give_statuses() {
     let empty = MlsSurface::new(&[], &[], MlsConfig::new(1.0)).unwrap();
+    assert_eq!((empty.len(), empty.is_empty()), (0, true));
     let q = [Point::origin()];
     assert_eq!(
         empty.curvature_at_points(&q, Parallelism::Sequential),

@@ -12,6 +12,7 @@ fn sphere_of_radius_r_has_curvature_one_over_r() {
         let (pts, nrm) = fibonacci_sphere(n, r);
         let spacing = r * (4.0 * std::f64::consts::PI / n as f64).sqrt();
         let surface = MlsSurface::new(&pts, &nrm, MlsConfig::new(2.0 * spacing)).unwrap();
+        assert_eq!((surface.len(), surface.is_empty()), (n, false));
         // The Fibonacci lattice is irregular at its poles (errors up to 2e-2 there); elsewhere
         // it is near-uniform and the level set through an input point is the sphere to about
         // 1e-6 (measured worst 6.5e-7 at h = 2 × spacing, 20,000 points).
