@@ -67,6 +67,12 @@ fn jet_matches_its_witness_with_and_without_slopes() {
         (700, 1.3, (0.0, 0.02, 0.0, 0.02)),
         (1500, 2.0, (1e-3, 0.02, 0.1, 0.02)),
         (1500, 2.0, (0.0, 0.0, 0.0, 0.0)),
+        // A strong ripple (the bias grows fast along the ladder), with and without noise, and
+        // strong noise on the quadric and cubic alone (the ladder climbs to 4.2 h, where the
+        // width of the confidence intervals decides where it stops).
+        (2500, 2.0, (0.0, 0.0, 0.0, 0.1)),
+        (2500, 2.0, (2e-3, 0.02, 0.0, 0.1)),
+        (2500, 2.0, (5e-3, 0.05, 0.0, 0.0)),
     ];
     let mut compared = 0;
     let mut worst = [0.0f64; 3];
