@@ -46,6 +46,96 @@ fn parallel_equals_sequential_bitwise() {
     let pa = surface.project_points(&pts[..500], Parallelism::Sequential);
     let pb = surface.project_points(&pts[..500], Parallelism::Rayon);
     assert_eq!(pa, pb);
+    // The clustered path (one neighbour search per cluster, each query's support filtered
+    // from it) gives each query its own support, as one query at a time does: the same
+    // samples (the last bits may differ, the sums being formed apart). Queries off the
+    // samples too, so that clusters spread.
+    let queries: Vec<Point> = pts
+        .iter()
+        .step_by(3)
+        .enumerate()
+        .map(|(i, p)| p + Vector::new(0.0, 0.0, 0.01 * ((i % 7) as f64 - 3.0)))
+        .collect();
+    let mut ev = surface.evaluator();
+    let clustered = surface.curvature_at_points(&queries, Parallelism::Rayon);
+    for (q, c) in queries.iter().zip(&clustered) {
+        let (c, one) = (c.as_ref().unwrap(), ev.curvature_at(q).unwrap());
+        assert_eq!(c.implicit.neighbours, one.implicit.neighbours, "at {q:?}");
+        let scale = one.curvature.k1.abs().max(one.curvature.k2.abs()).max(1.0);
+        assert!((c.curvature.k1 - one.curvature.k1).abs() <= 1e-12 * scale);
+        assert!((c.curvature.k2 - one.curvature.k2).abs() <= 1e-12 * scale);
+    }
+}
+
+/// Exactly `min_neighbours` samples (3 by default) in the support are enough, fewer are not,
+/// on the per-query and the clustered path alike.
+#[test]
+fn the_fewest_neighbours_accepted_are_enough() {
+    let h = 1.0;
+    let support = 5.0 * h;
+    let q = Point::origin();
+    let samples = [
+        Point::new(0.3, 0.0, 0.01),
+        Point::new(-0.2, 0.4, 0.0),
+        Point::new(0.1, -0.5, -0.02),
+        Point::new(support + 1.0, 0.0, 0.0),
+    ];
+    let normals = [Vector::z(); 4];
+    for count in [3, 2] {
+        let mut pts = samples[..count].to_vec();
+        let mut nrm = normals[..count].to_vec();
+        pts.push(samples[3]);
+        nrm.push(normals[3]);
+        let surface = MlsSurface::new(&pts, &nrm, MlsConfig::new(h)).unwrap();
+        let single = surface.evaluator().curvature_at(&q);
+        let clustered = surface.curvature_at_points(&[q], Parallelism::Sequential);
+        assert_eq!(clustered, [single.clone()]);
+        if count == 3 {
+            assert!(single.is_ok(), "{single:?}");
+        } else {
+            assert_eq!(single.err(), Some(PointStatus::TooFewNeighbours));
+        }
+    }
+}
+
+/// The jet fits a scale from 6 samples within its radius (with their slopes, 18 equations):
+/// a quadric exactly. With 5 at every scale it fails, and with none it says so.
+#[test]
+fn the_jet_needs_six_samples() {
+    use mls_core::JetConfig;
+    let h = 1.0;
+    // Samples of z = 0.1 x² within 1.5 h of the origin, with their exact normals, and one
+    // far beyond the ladder's largest radius (6 h).
+    let ring: Vec<Point> = (0..6)
+        .map(|i| {
+            let t = i as f64 * std::f64::consts::TAU / 6.0;
+            let (x, y) = (0.9 * t.cos(), 0.7 * t.sin());
+            Point::new(x, y, 0.1 * x * x)
+        })
+        .collect();
+    let normal = |p: &Point| Vector::new(-0.2 * p.x, 0.0, 1.0).normalize();
+    let far = Point::new(50.0, 0.0, 0.0);
+    let config = JetConfig::default();
+    for count in [6, 5] {
+        let mut pts = ring[..count].to_vec();
+        pts.push(far);
+        let nrm: Vec<Vector> = pts.iter().map(normal).collect();
+        let surface = MlsSurface::new(&pts, &nrm, MlsConfig::new(h)).unwrap();
+        let r = surface.jet_at_points(&[Point::origin()], &config, Parallelism::Sequential);
+        if count == 6 {
+            // A cup under an upward normal bends towards it: k2 = −0.2, k1 = 0.
+            let c = r[0].as_ref().expect("six samples fit").curvature;
+            assert!(c.k1.abs() < 1e-9 && (c.k2 + 0.2).abs() < 1e-9, "{c:?}");
+        } else {
+            assert_eq!(r[0].as_ref().err(), Some(&PointStatus::TooFewNeighbours));
+        }
+        let r = surface.jet_at_points(
+            &[Point::new(0.0, 0.0, 30.0)],
+            &config,
+            Parallelism::Sequential,
+        );
+        assert_eq!(r[0].as_ref().err(), Some(&PointStatus::NoNeighbours));
+    }
 }
 
 #[test]
