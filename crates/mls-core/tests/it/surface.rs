@@ -98,6 +98,42 @@ fn the_fewest_neighbours_accepted_are_enough() {
     }
 }
 
+/// Where no scale has enough equations to trust its own noise estimate (12 samples in all,
+/// 36 equations for degree 4's 15 coefficients, fewer than 3 per coefficient), the jet still
+/// answers from the full-degree fits of its ladder: exact on a quadric.
+#[test]
+fn a_sparse_neighbourhood_is_answered_from_its_untrusted_fits() {
+    use mls_core::JetConfig;
+    let h = 1.0;
+    let surface_z = |x: f64, y: f64| 0.1 * x * x - 0.05 * y * y;
+    let pts: Vec<Point> = (0..12)
+        .map(|i| {
+            let t = i as f64 * std::f64::consts::TAU / 12.0;
+            let r = if i % 2 == 0 { 1.1 } else { 0.6 };
+            let (x, y) = (r * t.cos(), r * t.sin());
+            Point::new(x, y, surface_z(x, y))
+        })
+        .collect();
+    let nrm: Vec<Vector> = pts
+        .iter()
+        .map(|p| Vector::new(-0.2 * p.x, 0.1 * p.y, 1.0).normalize())
+        .collect();
+    let surface = MlsSurface::new(&pts, &nrm, MlsConfig::new(h)).unwrap();
+    let r = surface.jet_at_points(
+        &[Point::origin()],
+        &JetConfig::default(),
+        Parallelism::Sequential,
+    );
+    let j = r[0].as_ref().expect("a sparse neighbourhood still fits");
+    assert_eq!(j.fit.degree, 4);
+    // Under an upward normal the x direction bends towards it, the y direction away.
+    let c = j.curvature;
+    assert!(
+        (c.k1 - 0.1).abs() < 1e-9 && (c.k2 + 0.2).abs() < 1e-9,
+        "{c:?}"
+    );
+}
+
 /// The jet fits a scale from 6 samples within its radius (with their slopes, 18 equations):
 /// a quadric exactly. With 5 at every scale it fails, and with none it says so.
 #[test]
