@@ -131,3 +131,20 @@ fn normals_are_rotation_and_translation_equivariant() {
         assert!(angle_deg(&(rot * na), &nb) < 1e-6);
     }
 }
+
+/// Confidence is `1 − 3σ`, clamped to `[0, 1]`: 1 for a flat neighbourhood, 0 for an
+/// isotropic one (σ = 1/3), and the orientation's seed prefers the larger.
+#[test]
+fn confidence_is_one_minus_three_times_the_variation() {
+    use mls_core::UnitNormal;
+    use mls_core::normals::NormalEstimate;
+    let e = |variation: f64| NormalEstimate {
+        normal: UnitNormal::new(Vector::z()).unwrap(),
+        variation,
+    };
+    assert_eq!(e(0.0).confidence(), 1.0);
+    assert_eq!(e(0.1).confidence(), 1.0 - 3.0 * 0.1);
+    assert_eq!(e(0.25).confidence(), 0.25);
+    assert_eq!(e(1.0 / 3.0).confidence(), 0.0);
+    assert_eq!(e(0.5).confidence(), 0.0);
+}
