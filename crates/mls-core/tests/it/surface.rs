@@ -78,7 +78,8 @@ fn the_fewest_neighbours_accepted_are_enough() {
         Point::new(0.3, 0.0, 0.01),
         Point::new(-0.2, 0.4, 0.0),
         Point::new(0.1, -0.5, -0.02),
-        Point::new(support + 1.0, 0.0, 0.0),
+        // Beyond the projection's gathering radius too (support + 1.5 h).
+        Point::new(support + 3.0, 0.0, 0.0),
     ];
     let normals = [Vector::z(); 4];
     for count in [3, 2] {
@@ -90,17 +91,43 @@ fn the_fewest_neighbours_accepted_are_enough() {
         let single = surface.evaluator().curvature_at(&q);
         let clustered = surface.curvature_at_points(&[q], Parallelism::Sequential);
         assert_eq!(clustered, [single.clone()]);
+        let projected = surface.evaluator().project(&q);
         if count == 3 {
             assert!(single.is_ok(), "{single:?}");
+            assert!(projected.is_ok(), "{projected:?}");
         } else {
             assert_eq!(single.err(), Some(PointStatus::TooFewNeighbours));
+            assert_eq!(projected.err(), Some(PointStatus::TooFewNeighbours));
         }
     }
 }
 
-/// Where no scale has enough equations to trust its own noise estimate (12 samples in all,
-/// 36 equations for degree 4's 15 coefficients, fewer than 3 per coefficient), the jet still
-/// answers from the full-degree fits of its ladder: exact on a quadric.
+/// Two patches 10⁶ apart along their normal, with h = 0.01: the frame's origin lies between
+/// them, so the local heights are ±5·10⁵, whose rounding (6e-11) is far above 1e-12 h. Steps
+/// along the normal below it cannot move the point, so the projection stops at the position's
+/// own rounding rather than fail after its last iteration.
+#[test]
+fn far_from_the_frame_origin_projection_stops_at_the_rounding() {
+    let (mut pts, mut nrm) = (Vec::new(), Vec::new());
+    for base in [-5e5, 5e5] {
+        for i in 0..400 {
+            let (u, v) = ((i % 20) as f64 * 0.005, (i / 20) as f64 * 0.005);
+            pts.push(Point::new(u, v, base + 0.2 * u * u));
+            nrm.push(Vector::new(-0.4 * u, 0.0, 1.0).normalize());
+        }
+    }
+    let surface = MlsSurface::new(&pts, &nrm, MlsConfig::new(0.01)).unwrap();
+    let queries: Vec<Point> = pts[150..170]
+        .iter()
+        .map(|p| p + Vector::new(0.0, 0.0, 0.002))
+        .collect();
+    for r in surface.project_points(&queries, Parallelism::Sequential) {
+        let p = r.expect("projection converges at the rounding").point;
+        // Back on the patch z = −5·10⁵ + 0.2 u².
+        assert!((p.z + 5e5 - 0.2 * p.x * p.x).abs() < 1e-4, "{p:?}");
+    }
+}
+
 #[test]
 fn a_sparse_neighbourhood_is_answered_from_its_untrusted_fits() {
     use mls_core::JetConfig;
