@@ -9,6 +9,7 @@ use rand_chacha::ChaCha8Rng;
 mod adaptive;
 mod jet;
 mod line;
+mod normals;
 
 const SEED: u64 = 0x5eed_0002;
 
