@@ -148,3 +148,29 @@ fn confidence_is_one_minus_three_times_the_variation() {
     assert_eq!(e(1.0 / 3.0).confidence(), 0.0);
     assert_eq!(e(0.5).confidence(), 0.0);
 }
+
+/// The corners of a box `(±a, ±b, ±c)` about the centre are equidistant from it, so equally
+/// weighted: the covariance is `diag(a², b², c²)` up to a factor, the normal is the z axis, the
+/// variation is `c²/(a² + b² + c²)`, and the neighbourhood is refused as degenerate exactly
+/// when `(b² − c²)/a² ≤ tolerance`.
+#[test]
+fn the_degeneracy_test_and_the_variation_on_a_box() {
+    let centre = Point::new(3.0, -2.0, 1.0);
+    let (a, c) = (1.0f64, 0.3f64);
+    let tolerance = 0.25;
+    for (b, accepted) in [(0.6f64, true), (0.55, false)] {
+        let mut box_corners = vec![centre];
+        for i in 0..8 {
+            let s = |bit: usize| if i & bit == 0 { 1.0 } else { -1.0 };
+            box_corners.push(centre + Vector::new(s(1) * a, s(2) * b, s(4) * c));
+        }
+        let r = normal_from_neighbourhood(&centre, &box_corners, 1.0, tolerance);
+        let ratio = (b * b - c * c) / (a * a);
+        assert_eq!(r.is_ok(), accepted, "b = {b}: (b² − c²)/a² = {ratio}");
+        if let Ok(e) = r {
+            assert!(e.normal.as_vector().cross(&Vector::z()).norm() < 1e-12);
+            let variation = c * c / (a * a + b * b + c * c);
+            assert!((e.variation - variation).abs() < 1e-12, "{}", e.variation);
+        }
+    }
+}
