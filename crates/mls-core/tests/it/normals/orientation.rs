@@ -273,3 +273,32 @@ fn sampled_consistency_counts_the_pairs_of_the_sampled_points() {
         Some(1.0)
     );
 }
+
+/// The line of sight of a voting rule: the unit direction to the viewpoint, finite for a
+/// viewpoint as far as 1e300 or as near as 1e-300, none at the viewpoint itself or for the
+/// rules that do not vote.
+#[test]
+fn line_of_sight_is_the_unit_direction_to_the_viewpoint() {
+    let p = Point::new(1.0, 2.0, 3.0);
+    let towards = |v: Point| Orientation::Viewpoint(v).line_of_sight(&p);
+    let close = |a: Vector, b: Vector| (a - b).norm() < 1e-15;
+    assert!(close(
+        towards(Point::new(4.0, 6.0, 3.0)).unwrap(),
+        Vector::new(0.6, 0.8, 0.0)
+    ));
+    // From the origin, where an offset of 1e-300 is not lost to rounding.
+    let o = Point::origin();
+    for offset in [1e300, 1e-300] {
+        let v = Point::from(Vector::new(-3.0, 0.0, 4.0) * offset);
+        let sight = Orientation::Viewpoint(v).line_of_sight(&o).unwrap();
+        assert!(
+            close(sight, Vector::new(-0.6, 0.0, 0.8)),
+            "{offset}: {sight:?}"
+        );
+    }
+    assert_eq!(towards(p), None);
+    assert_eq!(towards(Point::new(f64::INFINITY, 0.0, 0.0)), None);
+    assert_eq!(Orientation::Up.line_of_sight(&p), Some(Vector::z()));
+    assert_eq!(Orientation::Outward.line_of_sight(&p), None);
+    assert_eq!(Orientation::None.line_of_sight(&p), None);
+}
