@@ -302,3 +302,62 @@ fn line_of_sight_is_the_unit_direction_to_the_viewpoint() {
     assert_eq!(Orientation::Outward.line_of_sight(&p), None);
     assert_eq!(Orientation::None.line_of_sight(&p), None);
 }
+
+#[test]
+fn facing_shares_are_the_fractions_that_face() {
+    use mls_core::normals::Facing;
+    let f = Facing {
+        normals: 8,
+        facing: 6,
+        decisive: 4,
+        decisive_facing: 1,
+    };
+    assert_eq!((f.share(), f.decisive_share()), (Some(0.75), Some(0.25)));
+    let none = Facing {
+        normals: 0,
+        facing: 0,
+        decisive: 0,
+        decisive_facing: 0,
+    };
+    assert_eq!((none.share(), none.decisive_share()), (None, None));
+}
+
+/// `Orientation::None` leaves every sign as estimated: no components, patches or flips.
+#[test]
+fn no_orientation_leaves_the_signs_alone() {
+    let points = fibonacci_sphere(500, Point::origin(), 1.0);
+    let mut out = estimate_normals(&points, &unoriented(16), PAR).unwrap();
+    flip_randomly(&mut out.estimates, FLIP_SEED);
+    let before = unwrap_normals(&out.estimates);
+    let report = orient_normals(
+        &points,
+        &out.graph,
+        &mut out.estimates,
+        Orientation::None,
+        PAR,
+    )
+    .unwrap();
+    assert_eq!(unwrap_normals(&out.estimates), before);
+    assert_eq!(
+        (report.components, report.patches, report.flipped),
+        (0, 0, 0)
+    );
+    assert!(report.consistency.unwrap() < 0.7, "random signs");
+}
+
+/// Each neighbour pair counts once: on the line 0, 1, 3 with one neighbour each, 0 ↔ 1 is
+/// mutual and 3 → 1 is not, so the pairs are {0, 1} (normals opposed) and {1, 3} (agreeing).
+#[test]
+fn consistency_counts_each_neighbour_pair_once() {
+    let points = [
+        Point::new(0.0, 0.0, 0.0),
+        Point::new(1.0, 0.0, 0.0),
+        Point::new(3.0, 0.0, 0.0),
+    ];
+    let graph = NeighbourGraph::build(&points, 1, SEQ).unwrap();
+    let normals = [Vector::z(), -Vector::z(), -Vector::z()];
+    assert_eq!(
+        orientation_consistency(&graph, &normals, SEQ).unwrap(),
+        Some(0.5)
+    );
+}

@@ -39,6 +39,8 @@ fn spacing_of_a_square_grid_is_its_pitch() {
             stats.spacing
         );
         assert!((stats.nearest.median / pitch - 1.0).abs() < 1e-9);
+        // Every nearest distance is the pitch (up to the rotation's rounding): so is the mean.
+        assert!((stats.nearest.mean / pitch - 1.0).abs() < 1e-9);
         assert_eq!(stats.k, k);
         assert_eq!(stats.duplicates, 0);
         assert!(stats.nearest.min <= stats.nearest.p10 && stats.nearest.p90 <= stats.nearest.max);
@@ -62,4 +64,17 @@ fn spacing_of_a_fibonacci_sphere_is_the_root_of_area_per_point() {
             stats.spacing
         );
     }
+}
+
+/// −0.0 and 0.0 are one position: a point and its copy with a negated zero coordinate are
+/// duplicates. In the lexicographic order that finds duplicates, −0.0 would sort before every
+/// point of the grid's column x = 0, away from its twin.
+#[test]
+fn a_negative_zero_is_the_same_position() {
+    let mut points: Vec<Point> = square_grid(5, 5, 1.0);
+    assert!(points.contains(&Point::new(0.0, 1.0, 0.0)));
+    points.push(Point::new(-0.0, 1.0, 0.0));
+    let stats = spacing_statistics(&points, 4, SEQ).unwrap();
+    assert_eq!((stats.distinct, stats.duplicates), (25, 1));
+    assert_eq!(stats.nearest.min, 1.0);
 }
