@@ -90,7 +90,7 @@ fn the_fewest_neighbours_accepted_are_enough() {
         let surface = MlsSurface::new(&pts, &nrm, MlsConfig::new(h)).unwrap();
         let single = surface.evaluator().curvature_at(&q);
         let clustered = surface.curvature_at_points(&[q], Parallelism::Sequential);
-        assert_eq!(clustered, [single.clone()]);
+        assert_eq!(clustered, [single]);
         let projected = surface.evaluator().project(&q);
         if count == 3 {
             assert!(single.is_ok(), "{single:?}");
