@@ -78,3 +78,18 @@ fn a_negative_zero_is_the_same_position() {
     assert_eq!((stats.distinct, stats.duplicates), (25, 1));
     assert_eq!(stats.nearest.min, 1.0);
 }
+
+/// Two distinct positions are enough for a spacing, one is not (duplicates do not count).
+#[test]
+fn two_distinct_positions_have_a_spacing() {
+    use mls_core::normals::NormalsError;
+    let p = Point::new(1.0, 2.0, 3.0);
+    let q = Point::new(1.0, 2.0, 3.5);
+    let stats = spacing_statistics(&[p, p, q], 4, SEQ).unwrap();
+    assert_eq!((stats.distinct, stats.duplicates, stats.k), (2, 1, 1));
+    assert_eq!(stats.nearest.median, 0.5);
+    assert_eq!(
+        spacing_statistics(&[p, p, p], 4, SEQ).err(),
+        Some(NormalsError::TooFewDistinctPoints { distinct: 1 })
+    );
+}
