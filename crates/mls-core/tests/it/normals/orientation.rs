@@ -267,6 +267,15 @@ fn sampled_consistency_counts_the_pairs_of_the_sampled_points() {
         sampled_consistency(&single, k, 10, PAR, |_| Some(Vector::z())),
         None
     );
+    // Perpendicular normals (dot product 0) do not agree.
+    assert_eq!(
+        sampled_consistency(&cloud, k, n, PAR, |i| Some(if i % 2 == 0 {
+            Vector::x()
+        } else {
+            Vector::z()
+        })),
+        Some(brute_perpendicular(&points, k))
+    );
     // Agreement is the sign of the dot product, not its size: unit or not, all agree.
     assert_eq!(
         sampled_consistency(&cloud, k, n, PAR, |i| Some(Vector::z() * (1.0 + i as f64))),
@@ -360,4 +369,23 @@ fn consistency_counts_each_neighbour_pair_once() {
         orientation_consistency(&graph, &normals, SEQ).unwrap(),
         Some(0.5)
     );
+}
+
+/// The share of k-nearest pairs with the same parity of index (x against x, z against z):
+/// those whose normals agree when even points have x and odd ones z.
+fn brute_perpendicular(points: &[Point], k: usize) -> f64 {
+    let (mut all, mut same) = (0, 0);
+    for (i, p) in points.iter().enumerate() {
+        let mut others: Vec<usize> = (0..points.len()).filter(|&j| j != i).collect();
+        others.sort_by(|&a, &b| {
+            (points[a] - p)
+                .norm_squared()
+                .total_cmp(&(points[b] - p).norm_squared())
+        });
+        for &j in &others[..k] {
+            all += 1;
+            same += usize::from(i % 2 == j % 2);
+        }
+    }
+    same as f64 / all as f64
 }

@@ -93,3 +93,24 @@ fn two_distinct_positions_have_a_spacing() {
         Some(NormalsError::TooFewDistinctPoints { distinct: 1 })
     );
 }
+
+/// `suggest_h` names what is wrong: a factor that is not positive, or a spacing that is zero
+/// or not finite, rather than the scale they would give.
+#[test]
+fn suggest_h_names_a_bad_factor_or_spacing() {
+    use mls_core::normals::NormalsError;
+    let grid = square_grid(6, 6, 0.5);
+    let stats = spacing_statistics(&grid, 4, SEQ).unwrap();
+    assert_eq!(suggest_h(&stats, 2.0), Ok(2.0 * stats.spacing));
+    assert_eq!(
+        suggest_h(&stats, 0.0),
+        Err(NormalsError::InvalidFactor(0.0))
+    );
+    for spacing in [0.0, f64::INFINITY] {
+        let bad = mls_core::normals::SpacingStats { spacing, ..stats };
+        assert_eq!(
+            suggest_h(&bad, 2.0),
+            Err(NormalsError::DegenerateSpacing(spacing))
+        );
+    }
+}
