@@ -389,3 +389,32 @@ fn brute_perpendicular(points: &[Point], k: usize) -> f64 {
     }
     same as f64 / all as f64
 }
+
+/// A one-way neighbour edge joins the spanning forest like a mutual one: on the line 0, 1, 3
+/// with one neighbour each, 3 → 1 is the only edge of the last point, and the flipped normal
+/// there is turned to agree with its neighbour's.
+#[test]
+fn a_one_way_neighbour_edge_joins_the_forest() {
+    use mls_core::UnitNormal;
+    use mls_core::normals::NormalEstimate;
+    let points = [
+        Point::new(0.0, 0.0, 0.0),
+        Point::new(1.0, 0.0, 0.0),
+        Point::new(3.0, 0.0, 0.0),
+    ];
+    let graph = NeighbourGraph::build(&points, 1, SEQ).unwrap();
+    let estimate = |v: Vector| {
+        Ok(NormalEstimate {
+            normal: UnitNormal::new(v).unwrap(),
+            variation: 0.0,
+        })
+    };
+    let mut estimates = vec![
+        estimate(Vector::z()),
+        estimate(Vector::z()),
+        estimate(-Vector::z()),
+    ];
+    let report = orient_normals(&points, &graph, &mut estimates, Orientation::Up, SEQ).unwrap();
+    assert_eq!(report.components, 1);
+    assert!(unwrap_normals(&estimates).iter().all(|n| *n == Vector::z()));
+}
