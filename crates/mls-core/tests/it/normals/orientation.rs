@@ -418,3 +418,72 @@ fn a_one_way_neighbour_edge_joins_the_forest() {
     assert_eq!(report.components, 1);
     assert!(unwrap_normals(&estimates).iter().all(|n| *n == Vector::z()));
 }
+
+/// Across a crease (normals more than about 26° apart) a new patch starts and takes the sign
+/// the tree carries to it; the vote then decides, and a tie (a patch of vertical walls under
+/// `up`) keeps the carried sign. The chain 0 – 1 – 2 – 3: a roof patch tilted 37° (0, 1),
+/// then a wall patch (2, 3) estimated facing −x, away from the roof.
+#[test]
+fn a_tied_vote_keeps_the_sign_carried_across_the_crease() {
+    use mls_core::UnitNormal;
+    use mls_core::normals::NormalEstimate;
+    let points = [
+        Point::new(0.0, 0.0, 0.0),
+        Point::new(1.0, 0.0, 0.0),
+        Point::new(2.1, 0.0, 0.0),
+        Point::new(3.3, 0.0, 0.0),
+    ];
+    let graph = NeighbourGraph::build(&points, 1, SEQ).unwrap();
+    let estimate = |v: Vector| {
+        Ok(NormalEstimate {
+            normal: UnitNormal::new(v).unwrap(),
+            variation: 0.0,
+        })
+    };
+    let roof = Vector::new(0.6, 0.0, 0.8);
+    for (first, flips) in [(roof, 2), (-roof, 4)] {
+        let mut estimates = vec![
+            estimate(first),
+            estimate(first),
+            estimate(-Vector::x()),
+            estimate(-Vector::x()),
+        ];
+        let report = orient_normals(&points, &graph, &mut estimates, Orientation::Up, SEQ).unwrap();
+        // The roof faces up, the walls the side the roof's sign gives them (+x).
+        let want = [roof, roof, Vector::x(), Vector::x()];
+        for (got, want) in unwrap_normals(&estimates).iter().zip(want) {
+            assert!((got - want).norm() < 1e-15, "{got:?} against {want:?}");
+        }
+        assert_eq!(
+            (report.components, report.patches, report.flipped),
+            (1, 2, flips),
+            "{report:?}"
+        );
+    }
+}
+
+/// Every normal of a sphere turned inward, oriented outward: the seed and every other point
+/// are flipped, and the report counts them all.
+#[test]
+fn the_report_counts_every_flip_the_seed_included() {
+    let points = fibonacci_sphere(400, Point::origin(), 1.0);
+    let mut out = estimate_normals(&points, &unoriented(12), PAR).unwrap();
+    for (e, p) in out.estimates.iter_mut().zip(&points) {
+        let e = e.as_mut().unwrap();
+        if e.normal.as_vector().dot(&p.coords) > 0.0 {
+            e.normal = -e.normal;
+        }
+    }
+    let report = orient_normals(
+        &points,
+        &out.graph,
+        &mut out.estimates,
+        Orientation::Outward,
+        PAR,
+    )
+    .unwrap();
+    assert_eq!((report.components, report.flipped), (1, points.len()));
+    for (n, p) in unwrap_normals(&out.estimates).iter().zip(&points) {
+        assert!(n.dot(&p.coords) > 0.0);
+    }
+}
