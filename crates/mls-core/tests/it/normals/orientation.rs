@@ -441,10 +441,12 @@ fn a_tied_vote_keeps_the_sign_carried_across_the_crease() {
         })
     };
     let roof = Vector::new(0.6, 0.0, 0.8);
-    for (first, flips) in [(roof, 2), (-roof, 4)] {
+    // The third start disagrees inside the roof: the tree flips one roof normal, the vote
+    // then flips the patch, which leaves that one as estimated.
+    for (first, second, flips) in [(roof, roof, 2), (-roof, -roof, 4), (-roof, roof, 3)] {
         let mut estimates = vec![
             estimate(first),
-            estimate(first),
+            estimate(second),
             estimate(-Vector::x()),
             estimate(-Vector::x()),
         ];
@@ -485,5 +487,39 @@ fn the_report_counts_every_flip_the_seed_included() {
     assert_eq!((report.components, report.flipped), (1, points.len()));
     for (n, p) in unwrap_normals(&out.estimates).iter().zip(&points) {
         assert!(n.dot(&p.coords) > 0.0);
+    }
+}
+
+/// Two spheres 10 apart, every normal turned inward, oriented outward: each component's seed
+/// is judged from its own centroid, not the cloud's, so both end outward.
+#[test]
+fn each_component_is_oriented_from_its_own_centroid() {
+    let mut points = fibonacci_sphere(300, Point::new(-5.0, 0.0, 0.0), 1.0);
+    points.extend(fibonacci_sphere(300, Point::new(5.0, 1.0, 0.0), 1.5));
+    let centre = |i: usize| {
+        if i < 300 {
+            Point::new(-5.0, 0.0, 0.0)
+        } else {
+            Point::new(5.0, 1.0, 0.0)
+        }
+    };
+    let mut out = estimate_normals(&points, &unoriented(12), PAR).unwrap();
+    for (i, e) in out.estimates.iter_mut().enumerate() {
+        let e = e.as_mut().unwrap();
+        if e.normal.as_vector().dot(&(points[i] - centre(i))) > 0.0 {
+            e.normal = -e.normal;
+        }
+    }
+    let report = orient_normals(
+        &points,
+        &out.graph,
+        &mut out.estimates,
+        Orientation::Outward,
+        PAR,
+    )
+    .unwrap();
+    assert_eq!(report.components, 2);
+    for (i, n) in unwrap_normals(&out.estimates).iter().enumerate() {
+        assert!(n.dot(&(points[i] - centre(i))) > 0.0, "point {i}");
     }
 }
