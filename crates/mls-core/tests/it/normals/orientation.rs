@@ -369,6 +369,46 @@ fn consistency_counts_each_neighbour_pair_once() {
         orientation_consistency(&graph, &normals, SEQ).unwrap(),
         Some(0.5)
     );
+    // Perpendicular normals (dot product 0) do not agree.
+    let normals = [Vector::x(), Vector::z(), Vector::z()];
+    assert_eq!(
+        orientation_consistency(&graph, &normals, SEQ).unwrap(),
+        Some(0.5)
+    );
+}
+
+/// The facing counts of a voting rule: a normal 17° above horizontal faces `up` but is not
+/// decisive (within 60° of vertical), a vertical one is both. Creases (73° apart) make each
+/// point its own patch, voting up already, so nothing is flipped.
+#[test]
+fn facing_counts_decisive_normals_apart() {
+    use mls_core::UnitNormal;
+    use mls_core::normals::{Facing, NormalEstimate};
+    let points = [
+        Point::new(0.0, 0.0, 0.0),
+        Point::new(1.0, 0.0, 0.0),
+        Point::new(3.0, 0.0, 0.0),
+    ];
+    let graph = NeighbourGraph::build(&points, 1, SEQ).unwrap();
+    let low = Vector::new(0.3f64.mul_add(-0.3, 1.0).sqrt(), 0.0, 0.3);
+    let estimate = |v: Vector| {
+        Ok(NormalEstimate {
+            normal: UnitNormal::new(v).unwrap(),
+            variation: 0.0,
+        })
+    };
+    let mut estimates = vec![estimate(low), estimate(Vector::z()), estimate(low)];
+    let report = orient_normals(&points, &graph, &mut estimates, Orientation::Up, SEQ).unwrap();
+    assert_eq!(report.flipped, 0);
+    assert_eq!(
+        report.facing,
+        Some(Facing {
+            normals: 3,
+            facing: 3,
+            decisive: 1,
+            decisive_facing: 1,
+        })
+    );
 }
 
 /// The share of k-nearest pairs with the same parity of index (x against x, z against z):
@@ -461,6 +501,8 @@ fn a_tied_vote_keeps_the_sign_carried_across_the_crease() {
             (1, 2, flips),
             "{report:?}"
         );
+        // Horizontal walls neither face up nor away: only the roof faces.
+        assert_eq!(report.facing.map(|f| (f.normals, f.facing)), Some((4, 2)));
     }
 }
 
