@@ -243,6 +243,21 @@ mod tests {
         }
     }
 
+    /// e′ = 0.7 − exp(−t/h): concave, so Newton approaches the root t0 = h ln(1/0.7) from
+    /// below without crossing it, and the walk itself must stop on a step below 1e-12 h. The
+    /// root is not a double, so e′ never vanishes exactly on the way.
+    #[test]
+    fn a_one_sided_newton_walk_stops_at_the_tolerance() {
+        for h in [1.0, 1e-4, 1e4] {
+            let t0 = h * (1.0f64 / 0.7).ln();
+            let f = |t: f64| (0.7 - (-t / h).exp(), (-t / h).exp() / h);
+            let (t, calls) = walk(f, 0.0, h);
+            let t = t.unwrap_or_else(|| panic!("h {h}: no minimum"));
+            assert!((t - t0).abs() <= 1e-12 * h, "h {h}: {t} for {t0}");
+            assert!(calls <= 8, "h {h}: {calls} evaluations");
+        }
+    }
+
     /// Where e″ < 0 the walk takes a full step of h/4 downhill (Newton would head uphill),
     /// here past the minimum, then Newton inside the bracket: e = (t² − 1)² from t = ±0.3,
     /// h = 4 (steps of 1), finds ±1 in seven evaluations.
@@ -277,6 +292,8 @@ mod tests {
         // The minimum at 1.6 h lies beyond reach; at 1.4 h it is found.
         assert_eq!(walk(|t| (2.0 * (t - 3.2), 2.0), 0.0, 2.0).0, None);
         assert!(walk(|t| (2.0 * (t - 2.8), 2.0), 0.0, 2.0).0.is_some());
+        // A Newton step below the tolerance with e″ > 0 has converged, sign change or not.
+        assert_eq!(walk(|_| (-1e-15, 1e3), 0.0, 1.0), (Some(1e-18), 2));
         // Newton steps of 1e-9 h that never reach a sign change: the walk gives up after
         // MAX_WALK_STEPS of them rather than crawl the 1.5 h (10⁹ steps).
         assert_eq!(walk(|_| (-1e-6, 1e3), 0.0, 1.0), (None, MAX_WALK_STEPS + 1));
