@@ -258,6 +258,28 @@ mod tests {
         }
     }
 
+    /// e′ = atan((t − t0)/w) with w = h/100: Newton from the bracket's ends overshoots far
+    /// outside it (beyond |t − t0| ≈ 1.4 w it diverges), so the bracket is bisected until
+    /// Newton's basin is reached, then Newton converges.
+    #[test]
+    fn a_sharp_root_is_bracketed_and_bisected_into_newtons_reach() {
+        for h in [1.0, 1e-3] {
+            for t0 in [0.3 * h, -0.45 * h, 0.9 * h] {
+                let w = 0.01 * h;
+                let f = |t: f64| {
+                    let x = (t - t0) / w;
+                    (x.atan(), 1.0 / (w * (1.0 + x * x)))
+                };
+                let (t, calls) = walk(f, 0.0, h);
+                let t = t.unwrap();
+                assert!((t - t0).abs() <= 1e-12 * h, "h {h}: {t} for {t0}");
+                // At most 4 walking steps of h/4, 5 halvings of an h/4 bracket down to
+                // Newton's reach (about 1.4 w), 5 Newton steps.
+                assert!(calls <= 14, "h {h}, t0 {t0}: {calls} evaluations");
+            }
+        }
+    }
+
     /// Where e″ < 0 the walk takes a full step of h/4 downhill (Newton would head uphill),
     /// here past the minimum, then Newton inside the bracket: e = (t² − 1)² from t = ±0.3,
     /// h = 4 (steps of 1), finds ±1 in seven evaluations.
