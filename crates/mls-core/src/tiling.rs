@@ -420,6 +420,37 @@ impl TilePlan {
 mod tests {
     use super::*;
 
+    /// The reach of each estimator, with the millionth's margin: the kernel's support, the
+    /// jet's largest radius (6 h by default), and 3 h more for estimated normals.
+    #[test]
+    fn reach_is_the_support_of_what_decides_a_point() {
+        let h = 0.5;
+        let margin = 1.0 + 1e-6;
+        assert_eq!(
+            reach(h, Cutoff::Radius(5.0), None, false),
+            Some(5.0 * h * margin)
+        );
+        assert_eq!(
+            reach(h, Cutoff::Radius(5.0), None, true),
+            Some((5.0 * h + NORMALS_REACH * h) * margin)
+        );
+        let jet = JetConfig::default();
+        assert_eq!(
+            reach(h, Cutoff::Radius(5.0), Some(&jet), false),
+            Some(jet.max_radius() * h * margin)
+        );
+        assert_eq!(reach(h, Cutoff::None, None, true), None);
+    }
+
+    /// A flat 10 × 5 box in at most 50 cells: unit cells, 10 × 5 × 1 of them.
+    #[test]
+    fn a_grid_of_unit_cells_over_a_flat_box() {
+        let grid = Grid::new(Vector::zeros(), Vector::new(10.0, 5.0, 0.0), 50).unwrap();
+        assert_eq!(grid.cell(), 1.0);
+        assert_eq!(grid.dims(), [10, 5, 1]);
+        assert_eq!((grid.len(), grid.is_empty()), (50, false));
+    }
+
     fn plan_of(points: &[Point], max_cells: usize, reach: f64, capacity: u64) -> TilePlan {
         let (lo, hi) = points.iter().fold(
             (
