@@ -449,6 +449,15 @@ mod tests {
         assert_eq!(grid.cell(), 1.0);
         assert_eq!(grid.dims(), [10, 5, 1]);
         assert_eq!((grid.len(), grid.is_empty()), (50, false));
+        // Cells by floor, points outside the box in the nearest cell.
+        for (p, cell) in [
+            ((0.5, 0.5), [0, 0, 0]),
+            ((3.7, 4.2), [3, 4, 0]),
+            ((-5.0, 2.5), [0, 2, 0]),
+            ((100.0, 100.0), [9, 4, 0]),
+        ] {
+            assert_eq!(grid.cell_of(&Point::new(p.0, p.1, 0.0)), cell, "{p:?}");
+        }
     }
 
     fn plan_of(points: &[Point], max_cells: usize, reach: f64, capacity: u64) -> TilePlan {
