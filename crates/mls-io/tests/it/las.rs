@@ -360,14 +360,7 @@ fn las_output_needs_finite_x_y_z() {
 #[test]
 fn normals_written_as_extra_bytes_are_read_back() {
     let table = Table::new();
-    let normals: Vec<[f64; 3]> = table
-        .points
-        .iter()
-        .map(|p| {
-            let len = (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt();
-            [p[0] / len, p[1] / len, p[2] / len]
-        })
-        .collect();
+    let normals = radial_normals(&table.points);
     let mut columns = table.columns();
     columns.insert(3, Column::component("nx", &normals, Axis::X));
     columns.insert(4, Column::component("ny", &normals, Axis::Y));
@@ -387,14 +380,7 @@ fn normals_written_as_extra_bytes_are_read_back() {
 #[test]
 fn pdal_normal_dimensions_are_normals() {
     let table = Table::new();
-    let normals: Vec<[f64; 3]> = table
-        .points
-        .iter()
-        .map(|p| {
-            let len = (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt();
-            [p[0] / len, p[1] / len, p[2] / len]
-        })
-        .collect();
+    let normals = radial_normals(&table.points);
     let flipped: Vec<[f64; 3]> = normals.iter().map(|n| n.map(|c| -c)).collect();
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("pdal.las");
@@ -418,4 +404,15 @@ fn pdal_normal_dimensions_are_normals() {
     let cloud = mls_io::read_point_cloud(&path).unwrap();
     assert_eq!(cloud.normals.as_deref(), Some(&flipped[..]));
     assert_eq!(cloud.attributes.len(), attributes_before + 3);
+}
+
+/// The unit vector from the origin to each point, as test normals.
+fn radial_normals(points: &[[f64; 3]]) -> Vec<[f64; 3]> {
+    points
+        .iter()
+        .map(|p| {
+            let len = (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt();
+            [p[0] / len, p[1] / len, p[2] / len]
+        })
+        .collect()
 }

@@ -382,8 +382,7 @@ fn consistency_counts_each_neighbour_pair_once() {
 /// point its own patch, voting up already, so nothing is flipped.
 #[test]
 fn facing_counts_decisive_normals_apart() {
-    use mls_core::UnitNormal;
-    use mls_core::normals::{Facing, NormalEstimate};
+    use mls_core::normals::Facing;
     let points = [
         Point::new(0.0, 0.0, 0.0),
         Point::new(1.0, 0.0, 0.0),
@@ -391,13 +390,11 @@ fn facing_counts_decisive_normals_apart() {
     ];
     let graph = NeighbourGraph::build(&points, 1, SEQ).unwrap();
     let low = Vector::new(0.3f64.mul_add(-0.3, 1.0).sqrt(), 0.0, 0.3);
-    let estimate = |v: Vector| {
-        Ok(NormalEstimate {
-            normal: UnitNormal::new(v).unwrap(),
-            variation: 0.0,
-        })
-    };
-    let mut estimates = vec![estimate(low), estimate(Vector::z()), estimate(low)];
+    let mut estimates = vec![
+        flat_estimate(low),
+        flat_estimate(Vector::z()),
+        flat_estimate(low),
+    ];
     let report = orient_normals(&points, &graph, &mut estimates, Orientation::Up, SEQ).unwrap();
     assert_eq!(report.flipped, 0);
     assert_eq!(
@@ -435,24 +432,16 @@ fn brute_perpendicular(points: &[Point], k: usize) -> f64 {
 /// there is turned to agree with its neighbour's.
 #[test]
 fn a_one_way_neighbour_edge_joins_the_forest() {
-    use mls_core::UnitNormal;
-    use mls_core::normals::NormalEstimate;
     let points = [
         Point::new(0.0, 0.0, 0.0),
         Point::new(1.0, 0.0, 0.0),
         Point::new(3.0, 0.0, 0.0),
     ];
     let graph = NeighbourGraph::build(&points, 1, SEQ).unwrap();
-    let estimate = |v: Vector| {
-        Ok(NormalEstimate {
-            normal: UnitNormal::new(v).unwrap(),
-            variation: 0.0,
-        })
-    };
     let mut estimates = vec![
-        estimate(Vector::z()),
-        estimate(Vector::z()),
-        estimate(-Vector::z()),
+        flat_estimate(Vector::z()),
+        flat_estimate(Vector::z()),
+        flat_estimate(-Vector::z()),
     ];
     let report = orient_normals(&points, &graph, &mut estimates, Orientation::Up, SEQ).unwrap();
     assert_eq!(report.components, 1);
@@ -465,8 +454,6 @@ fn a_one_way_neighbour_edge_joins_the_forest() {
 /// then a wall patch (2, 3) estimated facing −x, away from the roof.
 #[test]
 fn a_tied_vote_keeps_the_sign_carried_across_the_crease() {
-    use mls_core::UnitNormal;
-    use mls_core::normals::NormalEstimate;
     let points = [
         Point::new(0.0, 0.0, 0.0),
         Point::new(1.0, 0.0, 0.0),
@@ -474,21 +461,15 @@ fn a_tied_vote_keeps_the_sign_carried_across_the_crease() {
         Point::new(3.3, 0.0, 0.0),
     ];
     let graph = NeighbourGraph::build(&points, 1, SEQ).unwrap();
-    let estimate = |v: Vector| {
-        Ok(NormalEstimate {
-            normal: UnitNormal::new(v).unwrap(),
-            variation: 0.0,
-        })
-    };
     let roof = Vector::new(0.6, 0.0, 0.8);
     // The third start disagrees inside the roof: the tree flips one roof normal, the vote
     // then flips the patch, which leaves that one as estimated.
     for (first, second, flips) in [(roof, roof, 2), (-roof, -roof, 4), (-roof, roof, 3)] {
         let mut estimates = vec![
-            estimate(first),
-            estimate(second),
-            estimate(-Vector::x()),
-            estimate(-Vector::x()),
+            flat_estimate(first),
+            flat_estimate(second),
+            flat_estimate(-Vector::x()),
+            flat_estimate(-Vector::x()),
         ];
         let report = orient_normals(&points, &graph, &mut estimates, Orientation::Up, SEQ).unwrap();
         // The roof faces up, the walls the side the roof's sign gives them (+x).
@@ -564,4 +545,12 @@ fn each_component_is_oriented_from_its_own_centroid() {
     for (i, n) in unwrap_normals(&out.estimates).iter().enumerate() {
         assert!(n.dot(&(points[i] - centre(i))) > 0.0, "point {i}");
     }
+}
+
+/// An estimate with the unit normal `v` and a flat neighbourhood (full confidence).
+fn flat_estimate(v: Vector) -> Result<mls_core::normals::NormalEstimate, mls_core::PointStatus> {
+    Ok(mls_core::normals::NormalEstimate {
+        normal: mls_core::UnitNormal::new(v).unwrap(),
+        variation: 0.0,
+    })
 }
