@@ -492,23 +492,9 @@ fn a_tied_vote_keeps_the_sign_carried_across_the_crease() {
 #[test]
 fn the_report_counts_every_flip_the_seed_included() {
     let points = fibonacci_sphere(400, Point::origin(), 1.0);
-    let mut out = estimate_normals(&points, &unoriented(12), PAR).unwrap();
-    for (e, p) in out.estimates.iter_mut().zip(&points) {
-        let e = e.as_mut().unwrap();
-        if e.normal.as_vector().dot(&p.coords) > 0.0 {
-            e.normal = -e.normal;
-        }
-    }
-    let report = orient_normals(
-        &points,
-        &out.graph,
-        &mut out.estimates,
-        Orientation::Outward,
-        PAR,
-    )
-    .unwrap();
+    let (report, normals) = inward_then_outward(&points, |_| Point::origin());
     assert_eq!((report.components, report.flipped), (1, points.len()));
-    for (n, p) in unwrap_normals(&out.estimates).iter().zip(&points) {
+    for (n, p) in normals.iter().zip(&points) {
         assert!(n.dot(&p.coords) > 0.0);
     }
 }
@@ -526,23 +512,9 @@ fn each_component_is_oriented_from_its_own_centroid() {
             Point::new(5.0, 1.0, 0.0)
         }
     };
-    let mut out = estimate_normals(&points, &unoriented(12), PAR).unwrap();
-    for (i, e) in out.estimates.iter_mut().enumerate() {
-        let e = e.as_mut().unwrap();
-        if e.normal.as_vector().dot(&(points[i] - centre(i))) > 0.0 {
-            e.normal = -e.normal;
-        }
-    }
-    let report = orient_normals(
-        &points,
-        &out.graph,
-        &mut out.estimates,
-        Orientation::Outward,
-        PAR,
-    )
-    .unwrap();
+    let (report, normals) = inward_then_outward(&points, centre);
     assert_eq!(report.components, 2);
-    for (i, n) in unwrap_normals(&out.estimates).iter().enumerate() {
+    for (i, n) in normals.iter().enumerate() {
         assert!(n.dot(&(points[i] - centre(i))) > 0.0, "point {i}");
     }
 }
@@ -553,4 +525,28 @@ fn flat_estimate(v: Vector) -> Result<mls_core::normals::NormalEstimate, mls_cor
         normal: mls_core::UnitNormal::new(v).unwrap(),
         variation: 0.0,
     })
+}
+
+/// Estimates the normals of `points`, turns every one towards its point's `centre`, orients
+/// them outward, and returns the report with the oriented normals.
+fn inward_then_outward(
+    points: &[Point],
+    centre: impl Fn(usize) -> Point,
+) -> (mls_core::normals::OrientationReport, Vec<Vector>) {
+    let mut out = estimate_normals(points, &unoriented(12), PAR).unwrap();
+    for (i, e) in out.estimates.iter_mut().enumerate() {
+        let e = e.as_mut().unwrap();
+        if e.normal.as_vector().dot(&(points[i] - centre(i))) > 0.0 {
+            e.normal = -e.normal;
+        }
+    }
+    let report = orient_normals(
+        points,
+        &out.graph,
+        &mut out.estimates,
+        Orientation::Outward,
+        PAR,
+    )
+    .unwrap();
+    (report, unwrap_normals(&out.estimates))
 }
