@@ -299,6 +299,28 @@ mod tests {
         }
     }
 
+    /// e = (t − 1/2)²/2 + sin(6t)/3 from 0 (h = 4, steps of 1): downhill to −1, then −2,
+    /// where e′ changes sign. Newton from the bracket's midpoint −1.5 lands at −0.86, behind
+    /// the bracket (−2, −1) and beside the maximum at −0.917; only the bracket's own minimum,
+    /// at −1.148, may be returned.
+    #[test]
+    fn newton_steps_outside_the_bracket_are_not_taken() {
+        let f = |t: f64| {
+            (
+                t - 0.5 + 2.0 * (6.0 * t).cos(),
+                1.0 - 12.0 * (6.0 * t).sin(),
+            )
+        };
+        let (t, _) = walk(f, 0.0, 4.0);
+        let t = t.unwrap();
+        let (e1, e2) = f(t);
+        assert!(-2.0 < t && t < -1.0, "{t} is outside the bracket");
+        assert!(
+            e1.abs() < 1e-12 && e2 > 0.0,
+            "not a minimum at {t}: e′ {e1}, e″ {e2}"
+        );
+    }
+
     #[test]
     fn a_minimum_at_the_start_is_returned_at_once() {
         assert_eq!(walk(|t| (2.0 * t, 2.0), 1.0, 1.0), (Some(0.0), 1));
