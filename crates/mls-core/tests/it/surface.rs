@@ -201,6 +201,31 @@ fn the_jet_needs_six_samples() {
     }
 }
 
+/// A ladder of one scale answers with that scale's fit: the scale the ladder ends on, when
+/// it agrees with the ones below (here: it is the only one), is among those it chooses from.
+#[test]
+fn a_ladder_of_one_scale_answers_with_its_fit() {
+    use mls_core::JetConfig;
+    let n = 20_000;
+    let (pts, nrm) = fibonacci_sphere(n, 1.0);
+    let h = 2.0 * (4.0 * std::f64::consts::PI / n as f64).sqrt();
+    let surface = MlsSurface::new(&pts, &nrm, MlsConfig::new(h)).unwrap();
+    let config = JetConfig {
+        scales: 1,
+        ..JetConfig::default()
+    };
+    let queries: Vec<Point> = pts.iter().step_by(97).copied().collect();
+    for r in surface.jet_at_points(&queries, &config, Parallelism::Rayon) {
+        let p = r.expect("one scale fits");
+        assert_eq!(p.fit.radius, config.radius * h);
+        let c = p.curvature;
+        assert!(
+            (c.k1 - 1.0).abs() < 1e-4 && (c.k2 - 1.0).abs() < 1e-4,
+            "{c:?}"
+        );
+    }
+}
+
 #[test]
 fn statuses_instead_of_numbers() {
     let (pts, nrm) = wavy_patch(3, 0.02, 0.3, 0.0);
