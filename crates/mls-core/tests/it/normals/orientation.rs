@@ -550,3 +550,57 @@ fn inward_then_outward(
     .unwrap();
     (report, unwrap_normals(&out.estimates))
 }
+
+/// A torus is not star-shaped about its centroid: at the hole the outward normal points
+/// towards the centroid. Here the normals by the hole are the most confident on one side of
+/// the hole (u = π) and the least on the other (u = 0), so only the true centroid with the
+/// confidence as a factor ranks the outer equator first; a reference point elsewhere (the
+/// centroid reflected through the cloud's box centre, or scaled by the point count) or the
+/// confidence as a divisor picks a seed by the hole and turns the whole torus inward. A
+/// sphere beside it moves the box centre off the torus's centroid.
+#[test]
+fn a_torus_is_seeded_on_its_outer_equator_whatever_the_confidence_by_the_hole() {
+    let (big, small) = (2.0, 0.5);
+    let shift = Vector::new(-5.0, 0.0, 0.0);
+    let (torus_points, tube_centres) = torus(120, 40, big, small);
+    let mut points: Vec<Point> = torus_points.iter().map(|p| p + shift).collect();
+    let mut outward: Vec<Vector> = torus_points
+        .iter()
+        .zip(&tube_centres)
+        .map(|(p, c)| (p - c) / small)
+        .collect();
+    let confidence: Vec<f64> = torus_points
+        .iter()
+        .zip(&outward)
+        .map(|(p, n)| {
+            let axis = Vector::new(p.x, p.y, 0.0).normalize();
+            if n.dot(&axis) < -0.9 {
+                // By the hole: 1 at u = π, 0.3 at u = 0.
+                0.65 - 0.35 * axis.x
+            } else {
+                0.8
+            }
+        })
+        .collect();
+    let sphere_centre = Point::new(5.0, 0.0, 0.0);
+    let sphere = fibonacci_sphere(800, sphere_centre, 1.0);
+    outward.extend(sphere.iter().map(|p| p - sphere_centre));
+    points.extend(sphere);
+    let mut estimates: Vec<_> = outward
+        .iter()
+        .zip(confidence.iter().chain(std::iter::repeat(&1.0)))
+        .map(|(n, c)| {
+            Ok(mls_core::normals::NormalEstimate {
+                normal: mls_core::UnitNormal::new(-n).unwrap(),
+                variation: (1.0 - c) / 3.0,
+            })
+        })
+        .collect();
+    let graph = NeighbourGraph::build(&points, 12, PAR).unwrap();
+    let report =
+        orient_normals(&points, &graph, &mut estimates, Orientation::Outward, PAR).unwrap();
+    assert_eq!((report.components, report.flipped), (2, points.len()));
+    for (i, (n, want)) in unwrap_normals(&estimates).iter().zip(&outward).enumerate() {
+        assert!(n.dot(want) > 0.0, "point {i} is inward");
+    }
+}
