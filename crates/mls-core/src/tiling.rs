@@ -460,6 +460,98 @@ mod tests {
         }
     }
 
+    /// A 20 × 10 box from (2, −1) in at most 50 cells: cells of 2. A block of cells has its
+    /// inner bounds on the grid lines and is open where it meets the grid's edge, since the
+    /// points beyond the box belong to the outer cells.
+    #[test]
+    fn a_block_of_cells_spans_its_grid_lines_and_is_open_at_the_grid_edge() {
+        let grid = Grid::new(Vector::new(2.0, -1.0, 0.0), Vector::new(22.0, 9.0, 0.0), 50).unwrap();
+        assert_eq!((grid.cell(), grid.dims()), (2.0, [10, 5, 1]));
+        assert_eq!(grid.cell_of(&Point::new(7.9, 2.9, 0.0)), [2, 1, 0]);
+        let inf = f64::INFINITY;
+        assert_eq!(
+            grid.world_box([3, 1, 0], [7, 4, 1]),
+            ([8.0, 1.0, -inf], [16.0, 7.0, inf])
+        );
+        assert_eq!(
+            grid.world_box([0, 2, 0], [10, 5, 1]),
+            ([-inf, 3.0, -inf], [inf, inf, inf])
+        );
+    }
+
+    /// A point loads exactly the tiles within its reach: those whose box (open at the grid's
+    /// edge) lies within `reach` of it, found here by brute force over every tile.
+    #[test]
+    fn a_point_loads_exactly_the_tiles_within_its_reach() {
+        let mut points = sheet();
+        let reach = 0.35;
+        let plan = plan_of(&points, 1 << 12, reach, 5_000);
+        assert_eq!(plan.reach(), reach);
+        // Beyond the box too, where the outer cells hold the points.
+        points.extend([Point::new(-3.0, 5.0, 0.0), Point::new(30.0, 30.0, 9.0)]);
+        let g = plan.grid();
+        let bound = |c: usize, i: usize, edge: f64| {
+            if c == 0 || c == g.dims()[i] {
+                edge
+            } else {
+                g.lo[i] + c as f64 * g.cell()
+            }
+        };
+        for p in points.iter().step_by(13) {
+            let mut near = Vec::new();
+            plan.tiles_near(p, |t| near.push(t));
+            near.sort_unstable();
+            let want: Vec<usize> = (0..plan.tiles().len())
+                .filter(|&t| {
+                    let tile = &plan.tiles()[t];
+                    let d2: f64 = (0..3)
+                        .map(|i| {
+                            let lo = bound(tile.start[i], i, f64::NEG_INFINITY);
+                            let hi = bound(tile.end[i], i, f64::INFINITY);
+                            (lo - p[i]).max(p[i] - hi).max(0.0).powi(2)
+                        })
+                        .sum();
+                    d2 <= reach * reach
+                })
+                .collect();
+            assert_eq!(near, want, "{p}");
+        }
+    }
+
+    /// A row of unit cells without halo (reach 0), split until each tile holds at most 40
+    /// points: the plane is at the median of the points, not of the cells, and a box of two
+    /// cells can still be split.
+    #[test]
+    fn a_box_is_split_at_the_median_of_its_points() {
+        let tiles_of = |counts: &[u64], capacity: u64| -> Vec<([usize; 3], [usize; 3], u64)> {
+            let n = counts.len();
+            let grid = Grid::new(Vector::zeros(), Vector::new(n as f64, 0.0, 0.0), n).unwrap();
+            assert_eq!(grid.dims(), [n, 1, 1]);
+            let plan = TilePlan::new(grid, counts, 0.0, capacity).unwrap();
+            plan.tiles()
+                .iter()
+                .map(|t| {
+                    assert_eq!(t.loaded, t.points);
+                    (t.start, t.end, t.points)
+                })
+                .collect()
+        };
+        // 80 points, half of them in the first cell: one plane, after that cell.
+        assert_eq!(
+            tiles_of(&[40, 0, 0, 0, 10, 10, 10, 10], 40),
+            [([0, 0, 0], [1, 1, 1], 40), ([1, 0, 0], [8, 1, 1], 40)]
+        );
+        // The first plane holding half the points, not the last: the empty cells go right.
+        assert_eq!(
+            tiles_of(&[10, 10, 10, 10, 0, 0, 0, 40], 40),
+            [([0, 0, 0], [4, 1, 1], 40), ([4, 0, 0], [8, 1, 1], 40)]
+        );
+        assert_eq!(
+            tiles_of(&[20, 20], 20),
+            [([0, 0, 0], [1, 1, 1], 20), ([1, 0, 0], [2, 1, 1], 20)]
+        );
+    }
+
     fn plan_of(points: &[Point], max_cells: usize, reach: f64, capacity: u64) -> TilePlan {
         let (lo, hi) = points.iter().fold(
             (
