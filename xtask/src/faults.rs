@@ -9,6 +9,7 @@ use std::path::Path;
 
 use anyhow::{Context, Result, bail};
 
+#[derive(Debug)]
 struct Fault {
     name: &'static str,
     description: &'static str,
@@ -265,6 +266,28 @@ const FAULTS: &[Fault] = &[
     },
 ];
 
+/// Every fault, or those whose name starts with one of `only`; a prefix that names no fault is
+/// an error (a typo, not a run with nothing to catch).
+fn select(only: &[String]) -> Result<Vec<&'static Fault>> {
+    if let Some(unknown) = only
+        .iter()
+        .find(|o| !FAULTS.iter().any(|f| f.name.starts_with(o.as_str())))
+    {
+        bail!(
+            "no fault's name starts with `{unknown}` (the names start with {})",
+            FAULTS
+                .iter()
+                .filter_map(|f| f.name.split_whitespace().next())
+                .collect::<Vec<_>>()
+                .join(", ")
+        );
+    }
+    Ok(FAULTS
+        .iter()
+        .filter(|f| only.is_empty() || only.iter().any(|o| f.name.starts_with(o.as_str())))
+        .collect())
+}
+
 /// Runs every fault, or those whose name starts with one of `only`.
 pub(crate) fn run(only: &[String]) -> Result<()> {
     let work = Path::new("target/faults/work");
@@ -272,11 +295,9 @@ pub(crate) fn run(only: &[String]) -> Result<()> {
         "# Fault injection\n\nEach fault is a source patch on a copy of the workspace; `cargo xtask validate --quick \
          --differential-only` then runs on the copy. Caught means it reported `validation failed`.\n\n| fault | misreading | result |\n| --- | --- | --- |\n",
     );
+    let selected = select(only)?;
     let mut missed = 0;
     let mut count = 0;
-    let selected = FAULTS
-        .iter()
-        .filter(|f| only.is_empty() || only.iter().any(|o| f.name.starts_with(o.as_str())));
     for fault in selected {
         count += 1;
         copy_workspace(work)?;
@@ -406,7 +427,24 @@ fn copy_recursively(src: &Path, dest: &Path) -> Result<()> {
 
 #[cfg(test)]
 mod tests {
-    use super::FAULTS;
+    use super::{FAULTS, select};
+
+    #[test]
+    fn prefixes_select_faults_and_a_typo_is_an_error() {
+        let names = |only: &[&str]| -> Vec<&str> {
+            let only: Vec<String> = only.iter().map(|s| s.to_string()).collect();
+            select(&only).unwrap().iter().map(|f| f.name).collect()
+        };
+        assert_eq!(names(&[]).len(), FAULTS.len());
+        let ne = names(&["NE"]);
+        assert_eq!(ne.len(), 3);
+        assert!(ne.iter().all(|n| n.starts_with("NE")));
+        assert_eq!(names(&["G1", "S1"]).len(), 2);
+        let err = select(&["G1".into(), "NOPE".into()])
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("`NOPE`"), "{err}");
+    }
 
     /// Every fault's text is in its file exactly once, so that `cargo xtask faults` can apply
     /// it: a refactor that rewrites the patched lines fails here, in `cargo test`, rather than
