@@ -448,7 +448,7 @@ mod tests {
 
     /// Every fault's text is in its file exactly once, so that `cargo xtask faults` can apply
     /// it: a refactor that rewrites the patched lines fails here, in `cargo test`, rather than
-    /// in the hour-long fault run.
+    /// in the half-hour fault run.
     #[test]
     fn every_fault_applies() {
         let root = crate::project_root();
