@@ -64,9 +64,17 @@ fn info_report(a: &InfoArgs, out: &mut String) -> Result<()> {
                 &name,
             )
         });
+    // The commands derive h from a sample of a large cloud; the statistics here are over
+    // every point (their extremes and the duplicates need all of them).
+    let full = indexed.as_ref().ok().map(|c| {
+        c.spacing_statistics(
+            mls_core::normals::DEFAULT_SPACING_NEIGHBOURS,
+            Parallelism::Rayon,
+        )
+    });
     match scale {
         Ok(scale) => {
-            if let Some(s) = scale.spacing {
+            if let Some(Ok(s)) = full {
                 println!(
                     "spacing         {:.6} (median local); nearest neighbour min {:.6}, median {:.6}, p90 {:.6}, max {:.6}",
                     s.spacing, s.nearest.min, s.nearest.median, s.nearest.p90, s.nearest.max

@@ -33,10 +33,10 @@ pub use orient::{
     orientation_consistency, sampled_consistency,
 };
 pub use spacing::{
-    DEFAULT_H_FACTOR, DEFAULT_SPACING_NEIGHBOURS, DistanceStats, SpacingStats, spacing_statistics,
-    square_grid_rms_distance, suggest_h,
+    DEFAULT_H_FACTOR, DEFAULT_SPACING_NEIGHBOURS, DistanceStats, SPACING_SAMPLE, SpacingStats,
+    spacing_statistics, square_grid_rms_distance, suggest_h,
 };
-pub(crate) use spacing::{spacing_of_local, spacing_on_tree};
+pub(crate) use spacing::{spacing_of_local, spacing_on_tree, stride};
 
 use crate::cloud::IndexedCloud;
 use crate::error::InputError;
@@ -201,7 +201,7 @@ pub fn estimate_normals_on(
     let graph = NeighbourGraph::build_on(cloud, config.k, par)?;
     let (h, spacing) = match config.h {
         Some(h) => (Some(h), None),
-        None => match cloud.spacing_statistics(DEFAULT_SPACING_NEIGHBOURS, par) {
+        None => match cloud.spacing(DEFAULT_SPACING_NEIGHBOURS, par) {
             Ok(stats) => (Some(suggest_h(&stats, DEFAULT_H_FACTOR)?), Some(stats)),
             // Fewer than two distinct positions: no covariance can have rank 2 either, so
             // every point fails below without needing a scale.

@@ -25,7 +25,7 @@ pub use self::input::{
     read_quietly, to_points,
 };
 pub use self::oriented::{Normals, check_file_normals, normals, scan_viewpoints};
-pub use self::scale::{Scale, check_scale, choose_h, choose_h_on, print_warning};
+pub use self::scale::{Scale, check_scale, choose_h_on, print_warning};
 pub use crate::output::{Carried, Output, check_output, write_stdout};
 
 /// The smallest cloud a neighbourhood can be built from: a covariance normal needs 3 points

@@ -2,7 +2,7 @@
 //! cloud, so that an h that spans the whole cloud is refused or warned about before a long run.
 
 use anyhow::{Context, Result, bail};
-use mls_core::normals::{DEFAULT_SPACING_NEIGHBOURS, SpacingStats, spacing_statistics, suggest_h};
+use mls_core::normals::{DEFAULT_SPACING_NEIGHBOURS, SpacingStats, suggest_h};
 use mls_core::{Cutoff, IndexedCloud, Parallelism, Point};
 
 /// The chosen h and a sentence on why.
@@ -168,19 +168,8 @@ pub fn print_warning(warning: String) {
     eprintln!("mlscurv: warning: {warning}");
 }
 
-pub fn choose_h(
-    points: &[Point],
-    h: Option<f64>,
-    factor: f64,
-    par: Parallelism,
-    file: &str,
-) -> Result<Scale> {
-    choose_h_from(h, factor, file, || {
-        spacing_statistics(points, DEFAULT_SPACING_NEIGHBOURS, par)
-    })
-}
-
-/// [`choose_h`] on an indexed cloud (the same h, without another tree).
+/// h given, or `factor` × the spacing of `cloud` measured at up to
+/// [`mls_core::normals::SPACING_SAMPLE`] points spread over it ([`IndexedCloud::spacing`]).
 pub fn choose_h_on(
     cloud: &IndexedCloud<'_>,
     h: Option<f64>,
@@ -189,7 +178,7 @@ pub fn choose_h_on(
     file: &str,
 ) -> Result<Scale> {
     choose_h_from(h, factor, file, || {
-        cloud.spacing_statistics(DEFAULT_SPACING_NEIGHBOURS, par)
+        cloud.spacing(DEFAULT_SPACING_NEIGHBOURS, par)
     })
 }
 
@@ -211,10 +200,15 @@ fn choose_h_from(
     let stats = stats().with_context(|| format!("{file}: cannot measure the point spacing"))?;
     let h = suggest_h(&stats, factor)
         .with_context(|| format!("{file}: cannot derive h from the spacing"))?;
+    let at = if stats.measured < stats.distinct {
+        format!(" at {} of {} points", stats.measured, stats.distinct)
+    } else {
+        String::new()
+    };
     Ok(Scale {
         h,
         why: format!(
-            "{factor} × median local spacing {:.6} over {} neighbours",
+            "{factor} × median local spacing {:.6} over {} neighbours{at}",
             stats.spacing, stats.k
         ),
         spacing: Some(stats),

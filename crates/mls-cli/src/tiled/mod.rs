@@ -25,9 +25,9 @@ mod tile;
 use std::path::Path;
 
 use anyhow::{Context, Result, bail};
-use mls_core::normals::{DEFAULT_SPACING_NEIGHBOURS, Orientation, spacing_statistics, suggest_h};
+use mls_core::normals::{DEFAULT_SPACING_NEIGHBOURS, Orientation, suggest_h};
 use mls_core::tiling::{self, Grid, TilePlan};
-use mls_core::{Frame, Parallelism, Point, Vector};
+use mls_core::{Frame, IndexedCloud, Parallelism, Point, Vector};
 use mls_io::FileFormat;
 
 use files::{TileWriters, Workspace, for_each_chunk, open_reader};
@@ -380,17 +380,22 @@ fn sampled_scale(
         Ok(())
     })?;
     let par = Parallelism::Rayon;
-    let stats = spacing_statistics(&points, DEFAULT_SPACING_NEIGHBOURS, par)
+    // Indexed and sampled as an in-memory run is: when the tiles taken are the whole cloud,
+    // the points are in file order, and h is the in-memory run's.
+    let cloud = IndexedCloud::new(&points, par).with_context(|| name.to_owned())?;
+    let stats = cloud
+        .spacing(DEFAULT_SPACING_NEIGHBOURS, par)
         .with_context(|| format!("{name}: cannot measure the point spacing"))?;
     let h = suggest_h(&stats, factor)
         .with_context(|| format!("{name}: cannot derive h from the spacing"))?;
     Ok(Scale {
         h,
         why: format!(
-            "{factor} × median local spacing {:.6} over {} neighbours, of {} points in {take} \
-             of {} tiles",
+            "{factor} × median local spacing {:.6} over {} neighbours at {} of the {} points in \
+             {take} of {} tiles",
             stats.spacing,
             stats.k,
+            stats.measured,
             points.len(),
             tiles.len()
         ),

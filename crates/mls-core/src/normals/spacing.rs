@@ -17,6 +17,16 @@ use crate::surface::Parallelism;
 /// square and of a hexagonal lattice lie at different radii).
 pub const DEFAULT_SPACING_NEIGHBOURS: usize = 12;
 
+/// Positions at which [`crate::IndexedCloud::spacing`] measures a larger cloud: every
+/// `⌈n / SPACING_SAMPLE⌉`-th stored point, an even spread over the cloud's Morton order.
+///
+/// The spacing is a median, and the median of 65,536 draws has a standard error of about
+/// `1.25 s/√65536 ≈ 0.5 %` of the local spacings' standard deviation `s`; that is 0.05–0.15 % of
+/// h on clouds whose local spacing varies by 10–30 %, far below what h's factor of 2 is chosen
+/// to. On a million points it is 1/16 of the neighbour queries, and the run's h no longer
+/// waits on them (0.6 of 3.3 s of `mlscurv curvature --method paper` on 2 cores).
+pub const SPACING_SAMPLE: usize = 1 << 16;
+
 /// Default ratio of the Gaussian scale to the spacing: `h = 2 × spacing`.
 ///
 /// The paper's examples use 1.6–2× the spacing. Placeholder, to be tuned by measurement.
@@ -81,6 +91,9 @@ pub struct SpacingStats {
     pub distinct: usize,
     /// Number of points that repeat an earlier position exactly.
     pub duplicates: usize,
+    /// Positions the statistics were measured at: `distinct`, or an even sample of them
+    /// ([`crate::IndexedCloud::spacing`]).
+    pub measured: usize,
     /// Distance to the nearest other position.
     pub nearest: DistanceStats,
     /// Distance to the k-th nearest other position.
@@ -122,14 +135,18 @@ pub fn spacing_statistics(
     check_points(points)?;
     let centre = bounding_box_centre(points);
     let coords: Vec<[f64; 3]> = points.iter().map(|p| (p.coords - centre).into()).collect();
-    spacing_of_local(coords, k, par)
+    spacing_of_local(coords, k, None, par)
 }
 
 /// [`spacing_statistics`] of points already relative to their bounding-box centre (and
 /// checked), on a tree of their distinct positions. `k` ≥ 1.
+///
+/// With `sample`, at most that many positions are measured, every `⌈distinct / sample⌉`-th in
+/// the sorted order.
 pub(crate) fn spacing_of_local(
     mut coords: Vec<[f64; 3]>,
     k: usize,
+    sample: Option<usize>,
     par: Parallelism,
 ) -> Result<SpacingStats, NormalsError> {
     let total = coords.len();
@@ -151,7 +168,8 @@ pub(crate) fn spacing_of_local(
     let k_eff = k.min(distinct - 1);
     let tree = ImmutableKdTree::<f64, 3>::new_from_slice(&coords)
         .map_err(|_| InputError::TooManyPoints(total))?;
-    let stats = spacing_on_tree(&tree, coords.len(), |i| coords[i], k_eff, par, false)
+    let stride = sample.map_or(1, |m| stride(distinct, m));
+    let stats = spacing_on_tree(&tree, distinct, |i| coords[i], k_eff, stride, par, false)
         .expect("distinct positions have no duplicates to report");
     Ok(SpacingStats {
         duplicates: total - distinct,
@@ -159,20 +177,31 @@ pub(crate) fn spacing_of_local(
     })
 }
 
-/// The statistics over the `n` points of `tree` (item `i` at `coord(i)`) with `k` neighbours
-/// each, `k < n`. With `detect_duplicates`, `None` as soon as a point has another at distance
-/// 0 (the statistics are over distinct positions: the caller removes duplicates first).
+/// The step that measures at most `sample` of `n` positions, evenly spread.
+pub(crate) fn stride(n: usize, sample: usize) -> usize {
+    n.div_ceil(sample.max(1)).max(1)
+}
+
+/// The statistics over the points `0, stride, 2·stride, …` of the `n` points of `tree` (item
+/// `i` at `coord(i)`) with `k` neighbours each, `k < n`. With `detect_duplicates`, `None` as
+/// soon as a measured point has another at distance 0 (the statistics are over distinct
+/// positions: the caller removes duplicates first).
 pub(crate) fn spacing_on_tree(
     tree: &ImmutableKdTree<f64, 3>,
     n: usize,
     coord: impl Fn(usize) -> [f64; 3] + Sync + Send,
     k: usize,
+    stride: usize,
     par: Parallelism,
     detect_duplicates: bool,
 ) -> Option<SpacingStats> {
     let rho = square_grid_rms_distance(k);
-    let per_point = |i: usize| local_distances(tree, &coord(i), i, k, rho, detect_duplicates);
-    let rows: Vec<Option<[f64; 3]>> = par.map(n, 256, per_point);
+    let measured = n.div_ceil(stride);
+    let per_point = |j: usize| {
+        let i = j * stride;
+        local_distances(tree, &coord(i), i, k, rho, detect_duplicates)
+    };
+    let rows: Vec<Option<[f64; 3]>> = par.map(measured, 256, per_point);
     let rows: Vec<[f64; 3]> = rows.into_iter().collect::<Option<_>>()?;
     let column = |c: usize| {
         let mut v: Vec<f64> = rows.iter().map(|r| r[c]).collect();
@@ -184,6 +213,7 @@ pub(crate) fn spacing_on_tree(
         k,
         distinct: n,
         duplicates: 0,
+        measured,
         nearest,
         kth,
         local_spacing,
