@@ -86,8 +86,6 @@ struct Local {
     w: f64,
     /// The slopes `(∂P/∂u, ∂P/∂v)` its normal asks for, when it enters the fit.
     slope: Option<[f64; 2]>,
-    /// The monomials `φ(u, v)` of degree ≤ 4, kept for the residual passes.
-    p: [f64; 15],
 }
 
 /// Fills `locals` with the samples within the support whose normal faces the frame.
@@ -126,7 +124,6 @@ fn local_samples(
             z: d.dot(n) / radius,
             w: (1.0 - s) * (1.0 - s) * (1.0 - s),
             slope,
-            p: [0.0; 15],
         });
     }
 }
@@ -193,8 +190,8 @@ struct Moments {
 }
 
 impl Moments {
-    /// The moments of `locals`, whose monomials it fills in.
-    fn of(locals: &mut [Local]) -> Self {
+    /// The moments of `locals`.
+    fn of(locals: &[Local]) -> Self {
         let mut m = Self {
             h: [0.0; 45],
             h2: [0.0; 45],
@@ -210,7 +207,6 @@ impl Moments {
         };
         for l in locals {
             let p = powers::<45>(l.u, l.v);
-            l.p.copy_from_slice(&p[..15]);
             let (w, w2) = (l.w, l.w * l.w);
             for ((h, h2), &p) in m.h.iter_mut().zip(&mut m.h2).zip(&p) {
                 *h += w * p;
@@ -404,7 +400,9 @@ fn solve<const N: usize>(
         // the sample's equations; only its (c20, c11, c02) block is formed.
         let mut meat = Matrix::zeros();
         for l in locals {
-            let p = &l.p;
+            // Recomputed, not kept from the moments: storing them cost more than these
+            // products (a store-to-load forwarding stall on the copy).
+            let p = &powers::<15>(l.u, l.v);
             let r = l.z - dot(&c, p);
             rss_h += l.w * r * r;
             let mut g = Vector::zeros();
