@@ -164,6 +164,26 @@ fn powers<const K: usize>(u: f64, v: f64) -> [f64; K] {
     })
 }
 
+/// Calls `f` with each sample and its first `K` monomials ([`powers`]), for the moments.
+///
+/// The next sample's monomials are computed while `f` runs on this one's, into the other half
+/// of a double buffer. Read back right after being written, a 16-byte load spanning two of the
+/// stores that wrote them could not be forwarded and waited for the store buffer to drain
+/// (16 % of the time on a LiDAR tile). The residual passes, with fewer stores per sample, were
+/// 4 % slower with it.
+fn for_each_with_powers<const K: usize>(locals: &[Local], mut f: impl FnMut(&Local, &[f64; K])) {
+    let mut buffer = [[0.0; K]; 2];
+    if let Some(first) = locals.first() {
+        buffer[0] = powers::<K>(first.u, first.v);
+    }
+    for (i, l) in locals.iter().enumerate() {
+        if let Some(next) = locals.get(i + 1) {
+            buffer[(i + 1) & 1] = powers::<K>(next.u, next.v);
+        }
+        f(l, &buffer[i & 1]);
+    }
+}
+
 /// Weighted moments of the support. A product of two monomials is a monomial, so every entry
 /// of the normal equations is one of these sums: 45 per sample (degree ≤ 8) build the 120
 /// distinct entries of each 15 × 15 matrix, and the slopes' matrices reuse them.
@@ -205,32 +225,31 @@ impl Moments {
             weight_h: 0.0,
             weight_s: 0.0,
         };
-        for l in locals {
-            let p = powers::<45>(l.u, l.v);
+        for_each_with_powers::<45>(locals, |l, p| {
             let (w, w2) = (l.w, l.w * l.w);
-            for ((h, h2), &p) in m.h.iter_mut().zip(&mut m.h2).zip(&p) {
+            for ((h, h2), &p) in m.h.iter_mut().zip(&mut m.h2).zip(p) {
                 *h += w * p;
                 *h2 += w2 * p;
             }
             let wz = w * l.z;
-            for (hz, &p) in m.hz.iter_mut().zip(&p) {
+            for (hz, &p) in m.hz.iter_mut().zip(p) {
                 *hz += wz * p;
             }
             m.weight_h += w;
             if let Some([a, b]) = l.slope {
-                for ((s, s2), &p) in m.s.iter_mut().zip(&mut m.s2).zip(&p) {
+                for ((s, s2), &p) in m.s.iter_mut().zip(&mut m.s2).zip(p) {
                     *s += w * p;
                     *s2 += w2 * p;
                 }
                 let (wa, wb) = (w * a, w * b);
-                for ((su, sv), &p) in m.su.iter_mut().zip(&mut m.sv).zip(&p) {
+                for ((su, sv), &p) in m.su.iter_mut().zip(&mut m.sv).zip(p) {
                     *su += wa * p;
                     *sv += wb * p;
                 }
                 m.weight_s += 2.0 * w;
                 m.slope_samples += 1;
             }
-        }
+        });
         m
     }
 
