@@ -359,8 +359,19 @@ impl Evaluator<'_> {
                 self.gather_candidates(&local, radius.map(|r| r + margin));
                 gathered_at = Some(local);
             }
-            if self.candidates.len() < s.config.min_neighbours.max(1) {
-                return Err(if self.candidates.is_empty() {
+            // The neighbours within the radius, as a query of its own would count them; the
+            // count stops at the fewest accepted (in a dense support, after a few samples).
+            let fewest = s.config.min_neighbours.max(1);
+            let within = match radius {
+                Some(r) => {
+                    let r2 = r * r;
+                    let near = |q: &&Sample| (q.point - local).norm_squared() <= r2;
+                    self.candidates.iter().filter(near).take(fewest).count()
+                }
+                None => self.candidates.len(),
+            };
+            if within < fewest {
+                return Err(if within == 0 {
                     PointStatus::NoNeighbours
                 } else {
                     PointStatus::TooFewNeighbours
