@@ -127,8 +127,14 @@ impl Method {
         match self {
             Method::Paper => "paper (Amenta–Kil, h = 2 spacings)".into(),
             Method::Jet(c) => format!(
-                "jet deg {} ρ₀ = {}h × {} Γ = {} {:?}",
-                c.degree, c.radius, c.scales, c.confidence, c.normals
+                "jet deg {} {}ρ₀ = {}h × {} Γ = {} {:?}",
+                c.degree,
+                c.lead_radius()
+                    .map_or(String::new(), |r| format!("lead {r:.2}h, ")),
+                c.radius,
+                c.scales,
+                c.confidence,
+                c.normals
             ),
             Method::Reference => "reference: degree-4 jet, 50 NN".into(),
         }
@@ -355,16 +361,22 @@ pub(crate) fn explore(only: Option<&String>) -> Result<()> {
     // scales and Γ); a smaller first support with 5 and 6 scales is the study of
     // docs/accuracy.md, "Studied, not adopted".
     for normals in [mls_core::NormalData::Ignore, mls_core::NormalData::Slopes] {
-        for (radius, scales, confidence) in [
-            (1.5, 5, 3.0),
-            (2.0, 5, 3.0),
-            (1.5, 5, 2.0),
-            (1.25, 5, 3.0),
-            (1.25, 6, 3.0),
+        // The lead scale (slopes only) with the default, then without it.
+        for (lead, radius, scales, confidence) in [
+            (true, 1.5, 5, 3.0),
+            (false, 1.5, 5, 3.0),
+            (false, 2.0, 5, 3.0),
+            (false, 1.5, 5, 2.0),
+            (false, 1.25, 5, 3.0),
+            (false, 1.25, 6, 3.0),
         ] {
+            if lead && normals == mls_core::NormalData::Ignore {
+                continue;
+            }
             methods.push(Method::Jet(JetConfig {
                 radius,
                 scales,
+                lead,
                 confidence,
                 normals,
                 ..JetConfig::default()
@@ -541,16 +553,16 @@ const CONCLUSIONS: &str = "
   least-squares problem, and the error falls like a power of the spacing: 14× from 10k to 40k
   random points.
 - **Against the reference** (degree-4 jet on 50 neighbours, what CGAL's jet fitting does): with
-  exact normals 0.11× on random clouds, 0.14× jittered, 0.14× grid, 0.02× on scanlines with their
-  boundary, 0.23× on the ellipsoid, 0.1× on the paper's clean torus and 0.02–0.03× under noise;
-  with estimated normals 0.25×, 0.26×, 0.30×, 0.12×, 0.36× and 0.04× (clean paper torus).
+  exact normals 0.1× on random clouds, 0.1× jittered, 0.1× grid, 0.02× on scanlines with their
+  boundary, 0.21× on the ellipsoid, 0.08× on the paper's clean torus and 0.02–0.03× under noise;
+  with estimated normals 0.25×, 0.26×, 0.30×, 0.11×, 0.36× and 0.04× (clean paper torus).
 - **Where the paper's method stays good.** On regular grids (the paper's own setting) it is exact to
   a few 1e-3 of max |k| at a fraction of the jet's time; `--method paper` keeps it, verified to
   1e-12 against hyper-dual AD.
 - **Normals.** File normals are data: fitted as slopes they carry the σ = 1e-3 torus from k1 σ ≈ 0.41
   (heights only) to 0.037. Estimated normals come from the same positions; fitted as slopes they
   count the positions twice and bring the covariance estimate's bias (measured 10–100× worse), so
-  they give the frame only, and the jet with estimated normals is 1.6–11× less accurate than with
+  they give the frame only, and the jet with estimated normals is 1.7–11× less accurate than with
   exact ones (heights only), though still 2.8–28× better than the reference and, under noise, than
   the paper's surface (k1 σ 0.042 against 0.056 at σ = 1e-4, 0.41 against 0.56 at σ = 1e-3).
 - **Scale.** The support climbs from 1.5 h by √2 up to 6 h while the scales' intervals
@@ -559,16 +571,25 @@ const CONCLUSIONS: &str = "
   the smallest, under noise a larger one. A fit with fewer than 3 equations per coefficient (the
   first scale without file normals) is a candidate but cannot stop the climb: its own noise
   estimate is unreliable, and before this rule one wild fit at 1.5 h ended the climb on 10 % of
-  the σ = 1e-3 torus (k1 σ 1.4 then, 0.41 now; clean clouds unchanged).
-- **Calibration** (observed RMS error / predicted, by decile of the prediction): 0.48–1.72 on the
+  the σ = 1e-3 torus (k1 σ 1.4 then, 0.41 now; clean clouds unchanged). With file normals a
+  lead scale one step below, 1.06 h, is fitted after the climb and joins the candidates where it
+  has 3 equations per coefficient (slopes triple the equations, so degree 4 is determined on a
+  smaller support with a smaller truncation bias). It lowers k1 nRMS on every clean cloud with
+  file normals (random 10k 1.84e-4 → 1.59e-4, 40k 1.30e-5 → 1.16e-5, jittered 2.59e-4 →
+  2.00e-4, grid 3.01e-4 → 2.18e-4, ellipsoid 1.00e-4 → 9.45e-5, paper torus 2.14e-5 → 1.74e-5
+  with its k1 mean from −1.1e-4 to −8.1e-5), leaves the scanlines and the noisy clouds as they
+  were, and costs 20 % more CPU time on the 200k sphere.
+- **Calibration** (observed RMS error / predicted, by decile of the prediction): 0.49–1.72 on the
   random, jittered, ellipsoid and noisy clouds, with file or estimated normals (one decile of the
-  10k random torus with file normals over-predicts by 2.08×); up to 2.5–3.2 on the scanlines'
-  boundary points, where the issue sets no bound.
+  10k random torus with file normals over-predicts by 2.04×); up to 2.5–3.2 on the scanlines'
+  boundary points, where the issue sets no bound; on the grid with file normals the lowest
+  deciles over-predict by up to 3.8× (the lead's errors there are smaller than its residuals
+  say).
 - **Speed.** The normal equations come from 45 weighted moments per sample (a product of
   monomials is a monomial) instead of 15 × 15 products per equation: 2.6× faster than the first
   jet. The 1M-point Fibonacci sphere with file normals takes about 23 CPU-seconds in the
-  curvature stage (86 k points/s on 2 cores): every point stops after two fits (1.5h and 2.1h) of
-  42 samples on average. A profile of that stage (200k sphere, one thread): the fit 62 % (its
+  curvature stage (86 k points/s on 2 cores) before the lead scale: every point stops after two
+  fits (1.5h and 2.1h) of 42 samples on average. A profile of that stage (200k sphere, one thread): the fit 62 % (its
   moments 21 %, the Cholesky factors and inverses of its two rounds 17 %, the residual passes
   15 %), the support query 14 %. On an airborne-LiDAR-like tile (`cargo xtask gen-cloud --points
   200000 --normals`, 2 cm range noise at 0.58 m spacing) 97 % of the points climb all five scales
@@ -580,15 +601,18 @@ const CONCLUSIONS: &str = "
   sample ahead into a double buffer they are not (bitwise the same results; farm-bench A/B,
   2 threads, CPU time: 0.89 on the 300k LiDAR tile, 0.95 on the 200k sphere, Intel Xeon
   2.3 GHz). Computing the moments twice adds 17 % to the sphere's time: the moments are no
-  longer the bottleneck, and no single pass is.
+  longer the bottleneck, and no single pass is. The lead scale (file normals) adds one small
+  fit per point in one round: farm-bench A/B, CPU time, 1.21 on the 200k sphere (where a point
+  otherwise makes two fits) and 1.04 on a 100k LiDAR-like tile (five).
 
 ## Studied, not adopted
 
 Measured with `cargo xtask accuracy-explore` (seed 1), which prints every variant below beside
 the default.
 
-- **A smaller first support when the normals are data** (ρ₀ = 1.25h with slopes: degree 4 needs
-  only 8 samples when each gives three equations). Every clean cloud improves 1.2–2.2× (k1 nRMS,
+- **A smaller first support when the normals are data, in the climb** (ρ₀ = 1.25h with slopes:
+  degree 4 needs only 8 samples when each gives three equations; what the lead scale now does
+  outside the climb). Every clean cloud improves 1.2–2.2× (k1 nRMS,
   file normals: random 10k 1.84e-4 → 1.02e-4, 40k 1.30e-5 → 8.97e-6, jittered 2.60e-4 → 1.32e-4,
   grid 3.01e-4 → 1.96e-4, scanlines 2.97e-3 → 1.34e-3, ellipsoid 1.01e-4 → 8.27e-5) and the paper
   torus's k1 mean meets its target (−8.7e-5). The noisy clouds get worse: σ = 1e-4 1.37e-3 →
@@ -598,7 +622,15 @@ the default.
   torus and 6.9 on the grid. Heights alone (estimated normals) lose on clean clouds (paper torus 7.5e-6 →
   5.4e-5, scanlines 1.8e-2 → 2.5e-2), though with the sixth scale the σ = 1e-3 torus improves
   (k1 σ 0.42 → 0.28): a larger top scale, not a smaller first one, is what noise asks for, and is
-  left to study. Real scans are noisy, so the default stays at 1.5h for both.
+  left to study. Real scans are noisy, so the climb stays at 1.5h for both. A lead scale outside
+  the climb (a candidate for the choice only) keeps the noisy clouds as they are; at 1.25 h
+  always admitted it gives the clean gains above but under-predicts the error of the grid's and
+  the paper torus's lowest deciles by 4.9× and 3.7×; at 1.06 h always admitted (paper torus
+  k1 nRMS 1.2e-5, grid 2.7e-5) it under-predicts the random ellipsoid's by 2.0–2.5× in eight
+  deciles of ten. Admitted only where it has 3 equations per coefficient (the ladder's
+  trust rule), as adopted, every calibration stays within 2× on the random and noisy clouds. As a
+  member of the climb a 1.25 h lead ends it early under noise (σ = 1e-3: k2 nRMS 1.42e-3 →
+  1.2e-2).
 - **Richardson extrapolation along the ladder**: the chosen scale's k replaced by `k_j − t_j c`,
   c the slope of the weighted line `k = k* + c t` (`t = (ρ/ρ₀)⁴`) through the ladder's fits, when
   `|c| > 3 sd(c)`, with `sd(c)` added to the predicted error. Where the ρ⁴ bias is systematic it
@@ -628,18 +660,18 @@ the default.
 
 - **Met:** on the random, jittered and scanline clouds the k1 and k2 nRMS are at most 0.34× the
   reference's with file or estimated normals (target ≤ 0.5×), and from 10k to 40k random points
-  they fall 14× (k1) and 8.5–9.4× (k2) (target ≥ 4×); the noisy torus with file normals has
-  k1 σ 6.3e-3 at σ = 1e-4 and 0.037 at σ = 1e-3 (targets 0.01 and 0.05); the paper torus's k1
-  and k2 σ are within 4.2e-4.
+  they fall 14× (k1) and 8.6–9.4× (k2) (target ≥ 4×); the noisy torus with file normals has
+  k1 σ 6.3e-3 at σ = 1e-4 and 0.037 at σ = 1e-3 (targets 0.01 and 0.05); the paper's clean
+  torus has k1 μ = −8.1e-5 and σ = 3.2e-5 with file normals, −3.7e-5 and 4.0e-6 with estimated
+  ones, and k2 within 2e-6 (targets |μ| ≤ 1e-4, σ ≤ 4.2e-4).
 - **Calibration:** within a factor 2 in every decile on the random and noisy clouds except one
-  decile of the 10k random torus with file normals, which over-predicts by 2.08×.
-- **Not met:** the paper's clean torus with file normals has k1 μ = −1.1e-4 (target
-  |μ| ≤ 1e-4; −3.7e-5 with estimated normals); estimated normals are 1.6–6× less accurate than
+  decile of the 10k random torus with file normals, which over-predicts by 2.04×.
+- **Not met:** estimated normals are 1.7–6× less accurate than
   file normals on the random, jittered, grid, scanline and ellipsoid clouds (target within
   1.5×). File normals are measurements the positions do not contain, and on clean clouds the
   jet's error is the truncation bias of its support; heights alone cannot match heights and
   slopes there (on the paper torus, where the slopes' truncation is the larger, they do better).
   The noisy torus with estimated normals has k1 σ 0.042 and 0.41 (the targets were measured with
-  exact normals). The jet's curvature stage is about 2.9× short of 250 k points/s on the 1M sphere
-  with file normals (the paper's method keeps that speed).
+  exact normals). The jet's curvature stage is about 3.5× short of 250 k points/s on the 1M sphere
+  with file normals, 2.9× before the lead scale (the paper's method keeps that speed).
 ";

@@ -31,6 +31,8 @@ pub struct JetWitness {
     pub condition: f64,
     /// Foot point.
     pub foot: Vector3<f64>,
+    /// λ of the fit's final round (0 without slopes).
+    pub slope_weight: f64,
 }
 
 /// The exponents of the degree-`d` basis, by total degree then by the power of v.
@@ -44,15 +46,16 @@ fn exponents(degree: usize) -> Vec<(i32, i32)> {
     out
 }
 
-/// One fit: `(coefficients in scaled units with their exponents, σ̂_h, covariance of
-/// (c20, c11, c02))`, or `None` when the weighted design does not determine the degree.
+/// One fit: `(coefficients in scaled units, their exponents, condition number of M,
+/// covariance of (c20, c11, c02), λ of the final round)`, or `None` when the weighted design
+/// does not determine the degree. A `given` λ is used in a single round.
 #[allow(clippy::type_complexity)]
 fn fit_once(
     rows: &[(f64, f64, f64, Vector3<f64>, f64)],
     degree: usize,
     slopes: bool,
-) -> Option<(Vec<f64>, Vec<(i32, i32)>, f64, Matrix3<f64>)> {
-    // (The third element is the condition number of M at the final solve.)
+    given: Option<f64>,
+) -> Option<(Vec<f64>, Vec<(i32, i32)>, f64, Matrix3<f64>, f64)> {
     let ex = exponents(degree);
     let m = ex.len();
     // Rows: every height, then (if used) two slope rows per sample with a usable normal.
@@ -106,9 +109,13 @@ fn fit_once(
     let wsum_h: f64 = a_h.iter().map(|r| r.2).sum();
     let wsum_s: f64 = a_s.iter().map(|r| r.2).sum();
     let use_slopes = slopes && wsum_s > 0.0;
-    let mut lambda = if use_slopes { 1.0 } else { 0.0 };
+    let mut lambda = if use_slopes {
+        given.unwrap_or(1.0)
+    } else {
+        0.0
+    };
     let mut out = None;
-    for _ in 0..if use_slopes { 2 } else { 1 } {
+    for _ in 0..if use_slopes && given.is_none() { 2 } else { 1 } {
         // The √ω-scaled dense system.
         let n_rows = a_h.len() + a_s.len();
         let mut a = DMatrix::<f64>::zeros(n_rows, m);
@@ -183,7 +190,13 @@ fn fit_once(
         let cov = Matrix3::from_fn(|i, j| cov_full[(3 + i, 3 + j)]);
         let eig = mm.clone().symmetric_eigenvalues();
         let condition = eig.max() / eig.min();
-        out = Some((c.iter().copied().collect(), ex.clone(), condition, cov));
+        out = Some((
+            c.iter().copied().collect(),
+            ex.clone(),
+            condition,
+            cov,
+            lambda,
+        ));
         if use_slopes {
             lambda = if var_s > 0.0 {
                 (var_h / var_s).clamp(1e-4, 1e4)
@@ -248,8 +261,13 @@ pub fn jet_candidates(
     let mut early = 0;
     let mut fallback: Option<JetWitness> = None;
     let (mut lo, mut hi) = ([f64::NEG_INFINITY; 2], [f64::INFINITY; 2]);
-    for j in 0..config.scales.max(1) {
-        let rho = config.radius * h * 2f64.sqrt().powi(j as i32);
+    // One scale: `None` when fewer than 6 samples lie within ρ, `Some(None)` when no degree
+    // is determined, else the fit with its number of equations. The first scale with samples
+    // sets the frame.
+    let fit_scale = |rho: f64,
+                     given: Option<f64>,
+                     frame: &mut Option<(Vector3<f64>, Vector3<f64>, Vector3<f64>)>|
+     -> Option<Option<(JetWitness, usize)>> {
         let near: Vec<(Vector3<f64>, Vector3<f64>, f64)> = samples
             .iter()
             .filter_map(|s| {
@@ -259,7 +277,7 @@ pub fn jet_candidates(
             })
             .collect();
         if near.len() < 6 {
-            continue;
+            return None;
         }
         let (t1, t2, n) = *frame.get_or_insert_with(|| {
             let sum: Vector3<f64> = near.iter().map(|(_, nu, w)| nu * *w).sum();
@@ -299,12 +317,9 @@ pub fn jet_candidates(
         let solution = (2..=config.degree.clamp(2, 4))
             .rev()
             .filter(|&d| equations as f64 >= 1.5 * ((d + 1) * (d + 2) / 2) as f64)
-            .find_map(|d| fit_once(&rows, d, slopes).map(|f| (d, f)));
-        let Some((degree, (c, ex, condition, cov))) = solution else {
-            if best.is_some() {
-                break;
-            }
-            continue;
+            .find_map(|d| fit_once(&rows, d, slopes, given).map(|f| (d, f)));
+        let Some((degree, (c, ex, condition, cov, slope_weight))) = solution else {
+            return Some(None);
         };
         let a00 = c[0] * rho;
         let foot = x + n * a00;
@@ -318,16 +333,33 @@ pub fn jet_candidates(
                 .sqrt()
                 .max(1e-8 / rho)
         });
-        let here = JetWitness {
-            k1: wc.k1,
-            k2: wc.k2,
-            sd,
-            bias: [0.0; 2],
-            condition,
-            degree,
-            radius: rho,
-            foot,
+        Some(Some((
+            JetWitness {
+                k1: wc.k1,
+                k2: wc.k2,
+                sd,
+                bias: [0.0; 2],
+                condition,
+                degree,
+                radius: rho,
+                foot,
+                slope_weight,
+            },
+            equations,
+        )))
+    };
+    for j in 0..config.scales.max(1) {
+        let rho = config.radius * h * 2f64.sqrt().powi(j as i32);
+        let Some(fitted) = fit_scale(rho, None, &mut frame) else {
+            continue;
         };
+        let Some((here, equations)) = fitted else {
+            if best.is_some() {
+                break;
+            }
+            continue;
+        };
+        let (degree, sd) = (here.degree, here.sd);
         if best.is_none() && degree < config.degree.clamp(2, 4) {
             fallback = fallback.or(Some(here));
             continue;
@@ -365,6 +397,21 @@ pub fn jet_candidates(
             return fallback.map(|w| vec![(0.0, w)]);
         }
         accepted = early;
+    }
+    // With slopes, the lead scale one √2 step below the first joins the candidates when it
+    // has the full degree and 3 equations per coefficient; the climb's frame is kept, and
+    // the first fit's λ is used in one round.
+    if slopes && config.lead {
+        let rho = config.radius / 2f64.sqrt() * h;
+        let full = config.degree.clamp(2, 4);
+        let given = Some(ladder[0].slope_weight);
+        if let Some(Some((here, equations))) = fit_scale(rho, given, &mut frame)
+            && here.degree == full
+            && equations as f64 >= 3.0 * ((full + 1) * (full + 2) / 2) as f64
+        {
+            ladder.insert(0, here);
+            accepted += 1;
+        }
     }
     // Least estimated squared error among the accepted scales; the bias of scale j is
     // t_j √(c² + var c) from the weighted line k = k* + c t, t = (ρ/ρ₀)⁴, through every fit.

@@ -105,8 +105,10 @@ pub fn curvature(a: CurvatureArgs) -> Result<()> {
             }
             match a.method {
                 Method::Jet => eprintln!(
-                    "  method          jet: weighted degree-{} fit, support {}h to {:.1}h chosen per point; normals {}",
+                    "  method          jet: weighted degree-{} fit, support {}{}h to {:.1}h chosen per point; normals {}",
                     jet.degree,
+                    jet.lead_radius()
+                        .map_or(String::new(), |r| format!("{r:.2}h (lead), ")),
                     jet.radius,
                     jet.max_radius(),
                     if normals_from_file {

@@ -10,8 +10,10 @@ use super::{
 };
 
 /// Fits a jet to the `samples` within the support radius `radius` of `centre` (the query, in
-/// the samples' frame), in the frame `(t1, t2, n)`. Returns `None` when no degree ≥ 2 is
-/// determined.
+/// the samples' frame), in the frame `(t1, t2, n)`. With slopes, `slope_weight` gives λ for a
+/// single round instead of the fit's own estimate (two rounds from λ = 1). Returns `None` when
+/// no degree ≥ 2 is determined.
+#[allow(clippy::too_many_arguments)]
 pub fn fit(
     samples: &[Sample],
     centre: &Point,
@@ -19,6 +21,7 @@ pub fn fit(
     radius: f64,
     degree: usize,
     normals: NormalData,
+    slope_weight: Option<f64>,
     scratch: &mut JetScratch,
 ) -> Option<JetFit> {
     let max_degree = degree.clamp(2, 4);
@@ -41,9 +44,9 @@ pub fn fit(
     }
     loop {
         let fitted = match deg {
-            4 => solve::<15>(locals, normals, &moments),
-            3 => solve::<10>(locals, normals, &moments),
-            _ => solve::<6>(locals, normals, &moments),
+            4 => solve::<15>(locals, normals, &moments, slope_weight),
+            3 => solve::<10>(locals, normals, &moments, slope_weight),
+            _ => solve::<6>(locals, normals, &moments, slope_weight),
         };
         if let Some(solution) = fitted {
             let mut coefficients = [0.0; 15];
@@ -60,6 +63,7 @@ pub fn fit(
                 noise: solution.height_noise * radius,
                 // (a20, a11, a02) = (c20, c11, c02)/ρ.
                 covariance: solution.covariance / (radius * radius),
+                slope_weight: solution.slope_weight,
             });
         }
         if deg == 2 {
@@ -287,6 +291,8 @@ struct Solution {
     height_noise: f64,
     /// Covariance of (c20, c11, c02).
     covariance: Matrix,
+    /// λ of the final round.
+    slope_weight: f64,
 }
 
 /// Relative weight of slope equations against height equations is bounded: the ratio of two
@@ -376,11 +382,13 @@ fn slope_matrix<const N: usize>(mu: &[f64]) -> Square<N> {
 }
 
 /// Solves the leading `N × N` block, with the slope equations weighted by the ratio of the
-/// two estimated noise variances (one re-weighting from an equal start).
+/// two estimated noise variances (one re-weighting from an equal start), or by a given λ in
+/// one round.
 fn solve<const N: usize>(
     locals: &[Local],
     normals: NormalData,
     moments: &Moments,
+    given: Option<f64>,
 ) -> Option<Solution> {
     let (hp, hp2, sp, sp2) = (
         height_matrix::<N>(&moments.h),
@@ -391,8 +399,12 @@ fn solve<const N: usize>(
     let (rp, rs) = (moments.height_rhs::<N>(), moments.slope_rhs::<N>());
     let (weight_h, weight_s) = (moments.weight_h, moments.weight_s);
     let use_slopes = normals == NormalData::Slopes && weight_s > 0.0;
-    let mut lambda = if use_slopes { 1.0 } else { 0.0 };
-    let rounds = if use_slopes { 2 } else { 1 };
+    let mut lambda = if use_slopes {
+        given.unwrap_or(1.0)
+    } else {
+        0.0
+    };
+    let rounds = if use_slopes && given.is_none() { 2 } else { 1 };
     let mut result = None;
     for round in 0..rounds {
         // The covariance is kept from the last round only: its sandwich is formed there.
@@ -473,6 +485,7 @@ fn solve<const N: usize>(
             c,
             height_noise: var_h.sqrt(),
             covariance,
+            slope_weight: lambda,
         });
         if use_slopes {
             lambda = if var_s > 0.0 {

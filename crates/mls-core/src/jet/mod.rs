@@ -32,7 +32,9 @@
 //! **Scale.** Support radii `ρ_j = ρ_0 √2^j` form a ladder, climbed while the confidence
 //! intervals `k_j ± Γ sd_j` of every scale so far intersect and the bias has not overtaken
 //! the scatter; the returned scale has the least estimated `sd² + bias²` ([`choose_scale`]).
-//! Fits too thin to trust their own noise estimate ([`trusted`]) are candidates only.
+//! Fits too thin to trust their own noise estimate ([`trusted`]) are candidates only. With
+//! slopes, a lead scale `ρ_0/√2` is fitted after the climb and joins the candidates when its
+//! noise estimate is trusted ([`JetConfig::lead`]).
 //! `docs/derivation.md` has the details and `mls_ad::jet_witness` recomputes all of it.
 
 use crate::curvature::{Curvature, curvature};
@@ -83,6 +85,13 @@ pub struct JetConfig {
     pub radius: f64,
     /// Number of scales, each √2 times the previous.
     pub scales: usize,
+    /// With [`NormalData::Slopes`], whether a lead scale one √2 step below `radius` is fitted
+    /// too, after the climb, as a candidate for the choice where its own noise estimate is
+    /// trusted ([`trusted`]); in one round, with the slopes weighted as in the ladder's first
+    /// fit (whose noise ratio has more samples behind it). Three equations per sample determine the jet on half the area
+    /// heights alone need, and the smaller support has a smaller truncation bias; it takes no
+    /// part in the stopping rules, which its few samples would make erratic under noise.
+    pub lead: bool,
     /// Γ, the half-width of the confidence intervals, in predicted standard deviations.
     pub confidence: f64,
     /// Whether the samples' normals enter the fit.
@@ -95,6 +104,7 @@ impl Default for JetConfig {
             degree: 4,
             radius: 1.5,
             scales: 5,
+            lead: true,
             confidence: 3.0,
             normals: NormalData::Slopes,
         }
@@ -105,6 +115,12 @@ impl JetConfig {
     /// The largest support radius of the ladder, in units of h.
     pub fn max_radius(&self) -> f64 {
         self.radius * std::f64::consts::SQRT_2.powi(self.scales.max(1) as i32 - 1)
+    }
+
+    /// The lead scale's support radius in units of h, when it is fitted (see [`Self::lead`]).
+    pub fn lead_radius(&self) -> Option<f64> {
+        (self.lead && self.normals == NormalData::Slopes)
+            .then(|| self.radius / std::f64::consts::SQRT_2)
     }
 }
 
@@ -126,6 +142,9 @@ pub struct JetFit {
     pub noise: f64,
     /// Estimated covariance of `(a20, a11, a02)`.
     pub covariance: Matrix,
+    /// λ, the weight of the slope equations against the heights in the final round (0
+    /// without slopes).
+    pub slope_weight: f64,
 }
 
 /// Curvature from a jet, with its predicted error.

@@ -125,6 +125,7 @@ impl Evaluator<'_> {
                 radius,
                 config.degree,
                 config.normals,
+                None,
                 &mut self.jet_scratch,
             ) else {
                 if best.is_some() {
@@ -166,13 +167,34 @@ impl Evaluator<'_> {
                 break;
             }
         }
-        if best.is_some() {
-            let accepted = self.ladder.len() - usize::from(!agree_last);
-            best = Some(jet::choose_scale(&self.ladder, accepted));
-        } else if early > 0 {
-            best = Some(jet::choose_scale(&self.ladder, early));
+        let mut accepted = if best.is_some() {
+            self.ladder.len() - usize::from(!agree_last)
+        } else {
+            early
+        };
+        if accepted == 0 {
+            return fallback.ok_or(failure);
         }
-        best.or(fallback).ok_or(failure)
+        // The lead scale, from the support already gathered (it holds every smaller one), in
+        // one round with the slopes weighted as the ladder's first fit found.
+        if let (Some(lead), Some(Some(frame))) = (config.lead_radius(), frame) {
+            let lead = jet::fit(
+                &self.support,
+                &local,
+                &frame,
+                lead * h,
+                config.degree,
+                config.normals,
+                Some(self.ladder[0].fit.slope_weight),
+                &mut self.jet_scratch,
+            )
+            .filter(|f| f.degree == config.degree.clamp(2, 4) && jet::trusted(f));
+            if let Some(Ok(p)) = lead.map(|f| jet::jet_curvature(x, &frame, &f)) {
+                self.ladder.insert(0, p);
+                accepted += 1;
+            }
+        }
+        Ok(jet::choose_scale(&self.ladder, accepted))
     }
 
     /// Collects into the internal buffer the samples within `radius` of `x` (all samples when

@@ -236,6 +236,7 @@ fn a_fit_takes_the_highest_degree_its_equations_determine() {
             1.0,
             4,
             normals,
+            None,
             &mut scratch,
         )
         .map(|f| (f.degree, f.equations))
@@ -276,6 +277,7 @@ fn fit_at(
         radius,
         4,
         normals,
+        None,
         &mut JetScratch::default(),
     )
 }

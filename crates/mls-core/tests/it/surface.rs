@@ -212,6 +212,7 @@ fn a_ladder_of_one_scale_answers_with_its_fit() {
     let surface = MlsSurface::new(&pts, &nrm, MlsConfig::new(h)).unwrap();
     let config = JetConfig {
         scales: 1,
+        lead: false,
         ..JetConfig::default()
     };
     let queries: Vec<Point> = pts.iter().step_by(97).copied().collect();
@@ -223,6 +224,39 @@ fn a_ladder_of_one_scale_answers_with_its_fit() {
             (c.k1 - 1.0).abs() < 1e-4 && (c.k2 - 1.0).abs() < 1e-4,
             "{c:?}"
         );
+    }
+}
+
+/// The lead scale, one √2 step below the first, is a candidate with slopes only: with
+/// heights alone no point answers from it, with slopes some do, and to the same accuracy.
+#[test]
+fn the_lead_scale_is_a_candidate_with_slopes_only() {
+    use mls_core::{JetConfig, NormalData};
+    let n = 20_000;
+    let (pts, nrm) = fibonacci_sphere(n, 1.0);
+    let h = 2.0 * (4.0 * std::f64::consts::PI / n as f64).sqrt();
+    let surface = MlsSurface::new(&pts, &nrm, MlsConfig::new(h)).unwrap();
+    let queries: Vec<Point> = pts.iter().step_by(37).copied().collect();
+    for normals in [NormalData::Ignore, NormalData::Slopes] {
+        let config = JetConfig {
+            normals,
+            ..JetConfig::default()
+        };
+        let lead = config.radius / std::f64::consts::SQRT_2 * h;
+        let mut from_lead = 0;
+        for r in surface.jet_at_points(&queries, &config, Parallelism::Rayon) {
+            let p = r.expect("the sphere fits");
+            from_lead += usize::from(p.fit.radius == lead);
+            let c = p.curvature;
+            assert!(
+                (c.k1 - 1.0).abs() < 1e-4 && (c.k2 - 1.0).abs() < 1e-4,
+                "{c:?}"
+            );
+        }
+        match normals {
+            NormalData::Ignore => assert_eq!(from_lead, 0),
+            NormalData::Slopes => assert!(from_lead > 0, "no point chose the lead scale"),
+        }
     }
 }
 
