@@ -88,9 +88,10 @@ pub struct JetConfig {
     /// With [`NormalData::Slopes`], whether a lead scale one √2 step below `radius` is fitted
     /// too, after the climb, as a candidate for the choice where its own noise estimate is
     /// trusted ([`trusted`]); in one round, with the slopes weighted as in the ladder's first
-    /// fit (whose noise ratio has more samples behind it). Three equations per sample determine the jet on half the area
-    /// heights alone need, and the smaller support has a smaller truncation bias; it takes no
-    /// part in the stopping rules, which its few samples would make erratic under noise.
+    /// fit (whose noise ratio has more samples behind it). Three equations per sample
+    /// determine the jet on a third of the area heights alone need, and the smaller support
+    /// has a smaller truncation bias; it takes no part in the stopping rules, which its few
+    /// samples would make erratic under noise.
     pub lead: bool,
     /// Γ, the half-width of the confidence intervals, in predicted standard deviations.
     pub confidence: f64,
