@@ -3,28 +3,48 @@
 //! curvature coefficients (`docs/derivation.md`, the jet).
 
 use crate::field::Sample;
+use crate::kernels::{Kernels, dispatch};
 use crate::math::{Matrix, Point, Vector};
 
 use super::{
-    A02, A11, A20, JetFit, MIN_EQUATIONS_PER_COEFFICIENT, MONOMIALS, NormalData, coefficient_count,
+    A02, A11, A20, JetConfig, JetFit, MIN_EQUATIONS_PER_COEFFICIENT, MONOMIALS, NormalData,
+    coefficient_count,
 };
 
-/// Fits a jet to the `samples` within the support radius `radius` of `centre` (the query, in
-/// the samples' frame), in the frame `(t1, t2, n)`. With slopes, `slope_weight` gives λ for a
+/// Fits a jet of `config`'s degree and normal data to the `samples` within the support radius
+/// `radius` of `centre` (the query, in the samples' frame), in the frame `(t1, t2, n)`. With
+/// slopes, `slope_weight` gives λ for a
 /// single round instead of the fit's own estimate (two rounds from λ = 1). Returns `None` when
 /// no degree ≥ 2 is determined.
-#[allow(clippy::too_many_arguments)]
+///
+/// Runs with the CPU's best [`crate::kernels`] (the same bits on each).
 pub fn fit(
     samples: &[Sample],
     centre: &Point,
     frame: &(Vector, Vector, Vector),
     radius: f64,
-    degree: usize,
-    normals: NormalData,
+    config: &JetConfig,
     slope_weight: Option<f64>,
     scratch: &mut JetScratch,
 ) -> Option<JetFit> {
-    let max_degree = degree.clamp(2, 4);
+    dispatch!(k => k.jet_fit(samples, centre, frame, radius, config, slope_weight, scratch))
+}
+
+/// [`fit`], compiled into each of [`crate::kernels`]' instruction sets: it and everything it
+/// calls here are `#[inline(always)]`, since only inlined code takes on the features of the
+/// `#[target_feature]` copy.
+#[inline(always)]
+pub(crate) fn jet_fit(
+    samples: &[Sample],
+    centre: &Point,
+    frame: &(Vector, Vector, Vector),
+    radius: f64,
+    config: &JetConfig,
+    slope_weight: Option<f64>,
+    scratch: &mut JetScratch,
+) -> Option<JetFit> {
+    let normals = config.normals;
+    let max_degree = config.degree.clamp(2, 4);
     let locals = &mut scratch.locals;
     local_samples(samples, centre, frame, radius, normals, locals);
     let moments = Moments::of(locals);
@@ -93,6 +113,7 @@ struct Local {
 }
 
 /// Fills `locals` with the samples within the support whose normal faces the frame.
+#[inline(always)]
 fn local_samples(
     samples: &[Sample],
     centre: &Point,
@@ -156,6 +177,7 @@ const EXPONENTS: [(usize, usize); 45] = {
 
 /// The first `K` monomials `u^p v^q` in the order of [`moment`], each a product of two powers
 /// (independent products, not a chain).
+#[inline(always)]
 fn powers<const K: usize>(u: f64, v: f64) -> [f64; K] {
     let (mut up, mut vp) = ([1.0; 9], [1.0; 9]);
     for i in 1..9 {
@@ -175,6 +197,7 @@ fn powers<const K: usize>(u: f64, v: f64) -> [f64; K] {
 /// stores that wrote them could not be forwarded and waited for the store buffer to drain
 /// (16 % of the time on a LiDAR tile). The residual passes, with fewer stores per sample, were
 /// 4 % slower with it.
+#[inline(always)]
 fn for_each_with_powers<const K: usize>(locals: &[Local], mut f: impl FnMut(&Local, &[f64; K])) {
     let mut buffer = [[0.0; K]; 2];
     if let Some(first) = locals.first() {
@@ -215,6 +238,7 @@ struct Moments {
 
 impl Moments {
     /// The moments of `locals`.
+    #[inline(always)]
     fn of(locals: &[Local]) -> Self {
         let mut m = Self {
             h: [0.0; 45],
@@ -229,6 +253,9 @@ impl Moments {
             weight_h: 0.0,
             weight_s: 0.0,
         };
+        // Where every sample has a slope (the rule on a smooth surface) the slopes' weighted
+        // moments are the heights' own, summed in the same order: copied, not summed twice.
+        let all_slopes = locals.iter().all(|l| l.slope.is_some());
         for_each_with_powers::<45>(locals, |l, p| {
             let (w, w2) = (l.w, l.w * l.w);
             for ((h, h2), &p) in m.h.iter_mut().zip(&mut m.h2).zip(p) {
@@ -241,9 +268,11 @@ impl Moments {
             }
             m.weight_h += w;
             if let Some([a, b]) = l.slope {
-                for ((s, s2), &p) in m.s.iter_mut().zip(&mut m.s2).zip(p) {
-                    *s += w * p;
-                    *s2 += w2 * p;
+                if !all_slopes {
+                    for ((s, s2), &p) in m.s.iter_mut().zip(&mut m.s2).zip(p) {
+                        *s += w * p;
+                        *s2 += w2 * p;
+                    }
                 }
                 let (wa, wb) = (w * a, w * b);
                 for ((su, sv), &p) in m.su.iter_mut().zip(&mut m.sv).zip(p) {
@@ -254,15 +283,22 @@ impl Moments {
                 m.slope_samples += 1;
             }
         });
+        if all_slopes {
+            let n = m.s.len();
+            m.s.copy_from_slice(&m.h[..n]);
+            m.s2.copy_from_slice(&m.h2[..n]);
+        }
         m
     }
 
     /// `Σ ω z φ`.
+    #[inline(always)]
     fn height_rhs<const N: usize>(&self) -> [f64; N] {
         std::array::from_fn(|a| self.hz[a])
     }
 
     /// `Σ ω (s_u ∂_u φ + s_v ∂_v φ)`.
+    #[inline(always)]
     fn slope_rhs<const N: usize>(&self) -> [f64; N] {
         std::array::from_fn(|a| {
             let (fu, iu, fv, iv) = DERIVATIVE[a];
@@ -273,6 +309,7 @@ impl Moments {
 
 /// The coefficients of `∂_u` and `∂_v` of `Σ_k x_k φ_k` on the monomials of degree ≤ 3
 /// (`x` has 15 entries, zero past the fitted ones).
+#[inline(always)]
 fn gradient_coefficients<T: Copy + Default + std::ops::Mul<f64, Output = T>>(
     x: &[T; 15],
 ) -> ([T; 10], [T; 10]) {
@@ -366,24 +403,33 @@ const SLOPE_PRODUCT: [[(f64, usize, f64, usize); 15]; 15] = {
     t
 };
 
-/// `Σ ω φ φᵀ` of the heights from their moments `mu`.
+/// `Σ ω φ φᵀ` of the heights from their moments `mu` (the lower triangle, mirrored).
+#[inline(always)]
 fn height_matrix<const N: usize>(mu: &[f64]) -> Square<N> {
-    std::array::from_fn(|a| std::array::from_fn(|b| mu[PRODUCT[a][b]]))
+    symmetric(|a, b| mu[PRODUCT[a][b]])
 }
 
 /// `Σ ω (∂_u φ ∂_u φᵀ + ∂_v φ ∂_v φᵀ)` of the slopes from their moments `mu`.
+#[inline(always)]
 fn slope_matrix<const N: usize>(mu: &[f64]) -> Square<N> {
-    std::array::from_fn(|a| {
-        std::array::from_fn(|b| {
-            let (fu, iu, fv, iv) = SLOPE_PRODUCT[a][b];
-            fu * mu[iu] + fv * mu[iv]
-        })
+    symmetric(|a, b| {
+        let (fu, iu, fv, iv) = SLOPE_PRODUCT[a][b];
+        fu * mu[iu] + fv * mu[iv]
     })
+}
+
+/// The symmetric matrix with the lower-triangle entries `entry(a, b)`, `b ≤ a`.
+#[inline(always)]
+fn symmetric<const N: usize>(entry: impl Fn(usize, usize) -> f64) -> Square<N> {
+    let mut m: Square<N> = std::array::from_fn(|a| std::array::from_fn(|b| entry(a, b.min(a))));
+    mirror(&mut m);
+    m
 }
 
 /// Solves the leading `N × N` block, with the slope equations weighted by the ratio of the
 /// two estimated noise variances (one re-weighting from an equal start), or by a given λ in
 /// one round.
+#[inline(always)]
 fn solve<const N: usize>(
     locals: &[Local],
     normals: NormalData,
@@ -499,27 +545,35 @@ fn solve<const N: usize>(
 }
 
 /// `Σ_k x_k p_k` over the first `x.len()` monomials.
+#[inline(always)]
 fn dot(x: &[f64], p: &[f64; 15]) -> f64 {
     x.iter().zip(p).map(|(x, p)| x * p).sum()
 }
 
 /// `Σ_k s_k p_k` for 3-vectors `s_k`.
+#[inline(always)]
 fn combine(s: &[Vector], p: &[f64; 15]) -> Vector {
     s.iter()
         .zip(p)
         .fold(Vector::zeros(), |acc, (s, &p)| acc + s * p)
 }
 
-/// `tr(A B)` of two symmetric matrices, as their Frobenius product (N² products, not N³).
+/// `tr(A B)` of two symmetric matrices, as their Frobenius product over the lower triangle
+/// (N²/2 products, not N³).
+#[inline(always)]
 fn trace_product<const N: usize>(a: &Square<N>, b: &Square<N>) -> f64 {
-    a.iter()
-        .zip(b)
-        .map(|(a, b)| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>())
-        .sum()
+    let mut diagonal = 0.0;
+    let mut off = 0.0;
+    for i in 0..N {
+        diagonal += a[i][i] * b[i][i];
+        off += dot_prefix(&a[i], &b[i], i);
+    }
+    diagonal + 2.0 * off
 }
 
 /// A Cholesky factor `L` (`LLᵀ = A`) with the reciprocals of its diagonal.
 struct Factor<const N: usize> {
+    /// `L` in the lower triangle and on the diagonal (the strict upper triangle is not read).
     l: Square<N>,
     inv_diag: [f64; N],
 }
@@ -527,31 +581,57 @@ struct Factor<const N: usize> {
 /// The lower Cholesky factor of the symmetric `a`, or `None` when a squared pivot falls below
 /// `1e-10` of the largest diagonal entry: the basis is then not determined by the samples (too
 /// few, or on a line), and fitting it would fit noise.
+///
+/// Right-looking (each column, then a rank-1 update of the rest): the updates are independent
+/// along a row, so they run as vector operations rather than one chain of dependent sums.
+#[inline(always)]
 fn cholesky<const N: usize>(a: &Square<N>) -> Option<Factor<N>> {
     let max_diag = (0..N).map(|i| a[i][i]).fold(0.0f64, f64::max);
-    let mut l = [[0.0; N]; N];
+    // Factored in place: column k of L replaces column k of what is left of `a`.
+    let mut l = *a;
     let mut inv_diag = [0.0; N];
-    for i in 0..N {
-        for j in 0..i {
-            l[i][j] = (a[i][j] - dot_prefix(&l[i], &l[j], j)) * inv_diag[j];
-        }
-        let s = a[i][i] - dot_prefix(&l[i], &l[i], i);
+    for k in 0..N {
+        let s = l[k][k];
         if !(s > 1e-10 * max_diag) {
             return None;
         }
-        l[i][i] = s.sqrt();
-        inv_diag[i] = 1.0 / l[i][i];
+        l[k][k] = s.sqrt();
+        inv_diag[k] = 1.0 / l[k][k];
+        let mut column = [0.0; N];
+        for i in k + 1..N {
+            column[i] = l[i][k] * inv_diag[k];
+            l[i][k] = column[i];
+        }
+        for i in k + 1..N {
+            let f = column[i];
+            for (r, c) in l[i][k + 1..=i].iter_mut().zip(&column[k + 1..=i]) {
+                *r -= f * c;
+            }
+        }
     }
     Some(Factor { l, inv_diag })
 }
 
+/// Copies the strict lower triangle of `m` onto the upper.
+#[inline(always)]
+fn mirror<const N: usize>(m: &mut Square<N>) {
+    for i in 1..N {
+        let (above, below) = m.split_at_mut(i);
+        for (j, row) in above.iter_mut().enumerate() {
+            row[i] = below[0][j];
+        }
+    }
+}
+
 /// `Σ_{k<n} x_k y_k`.
+#[inline(always)]
 fn dot_prefix(x: &[f64], y: &[f64], n: usize) -> f64 {
     x[..n].iter().zip(&y[..n]).map(|(x, y)| x * y).sum()
 }
 
 impl<const N: usize> Factor<N> {
     /// `x` with `LLᵀ x = b`, by forward and back substitution.
+    #[inline(always)]
     fn solve(&self, b: &[f64; N]) -> [f64; N] {
         let (l, d) = (&self.l, &self.inv_diag);
         let mut y = [0.0; N];
@@ -566,26 +646,35 @@ impl<const N: usize> Factor<N> {
         x
     }
 
-    /// `A⁻¹ = L⁻ᵀ L⁻¹`.
+    /// `A⁻¹ = L⁻ᵀ L⁻¹`, from the rows of `L⁻¹` (each a combination of the rows above it) and
+    /// their outer products: both as independent updates along a row, which vectorise.
+    #[inline(always)]
     fn inverse(&self) -> Square<N> {
         let (l, d) = (&self.l, &self.inv_diag);
-        // L⁻¹ stored transposed (row j holds column j), so both loops below run along rows.
-        let mut lit = [[0.0; N]; N];
-        for j in 0..N {
-            lit[j][j] = d[j];
-            for i in j + 1..N {
-                let s: f64 = (j..i).map(|k| l[i][k] * lit[j][k]).sum();
-                lit[j][i] = -s * d[i];
+        // Row k of L⁻¹ is d_k (e_k − Σ_{m<k} l_km row_m); it vanishes past column k.
+        let mut li = [[0.0; N]; N];
+        for k in 0..N {
+            let mut row = [0.0; N];
+            row[k] = 1.0;
+            for (m, &f) in l[k][..k].iter().enumerate() {
+                for (r, x) in row[..=m].iter_mut().zip(&li[m][..=m]) {
+                    *r -= f * x;
+                }
+            }
+            for (x, r) in li[k][..=k].iter_mut().zip(&row[..=k]) {
+                *x = r * d[k];
             }
         }
+        // (L⁻ᵀ L⁻¹)_ij = Σ_k li_ki li_kj, summed over the rows.
         let mut inv = [[0.0; N]; N];
-        for i in 0..N {
-            for j in 0..=i {
-                let s: f64 = (i..N).map(|k| lit[i][k] * lit[j][k]).sum();
-                inv[i][j] = s;
-                inv[j][i] = s;
+        for (k, row) in li.iter().enumerate() {
+            for (i, &f) in row[..=k].iter().enumerate() {
+                for (x, r) in inv[i][..=i].iter_mut().zip(&row[..=i]) {
+                    *x += f * r;
+                }
             }
         }
+        mirror(&mut inv);
         inv
     }
 }

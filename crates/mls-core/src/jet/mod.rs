@@ -43,6 +43,7 @@ use crate::status::PointStatus;
 
 mod fit;
 
+pub(crate) use fit::jet_fit;
 pub use fit::{JetScratch, fit};
 
 /// Exponents `(i, j)` of the monomials `u^i v^j`, by total degree: the first

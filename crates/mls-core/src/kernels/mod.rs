@@ -1,7 +1,8 @@
-//! The per-sample loops of the field and of the projection's line search, compiled once per
-//! instruction set, with the dispatch between them and the branch-free exp they use. They
-//! are the only code whose cost grows with the number of samples; `field` and `projection`
-//! hold the maths around them (docs/derivation.md) and call them through [`Kernels`].
+//! The per-sample loops of the field and of the projection's line search, and the jet's fit,
+//! compiled once per instruction set, with the dispatch between them and the branch-free exp
+//! they use. They are the only code whose cost grows with the number of samples; `field` and
+//! `projection` hold the maths around them (docs/derivation.md) and call them through
+//! [`Kernels`]; the jet's fit lives in `jet/fit.rs`, inlined here.
 //!
 //! Layout (after kiddo's `float_leaf_simd/`): `field.rs` the loops over the field's sample
 //! blocks, `line.rs` the line search's, `exp.rs` the exp; here the lane count, the
@@ -17,6 +18,7 @@ pub(crate) use field::{Block, coefficients, lane_moments, load_blocks, weigh, we
 pub(crate) use line::{LineBlock, line_energy};
 
 use crate::field::Sample;
+use crate::jet::{JetConfig, JetFit, JetScratch, jet_fit};
 use crate::math::{Point, Vector};
 
 /// Samples per [`Block`]: the per-neighbour sums run on `LANES` independent partial sums,
@@ -106,6 +108,18 @@ kernels! {
     fn lane_moments(blocks: &[Block], k: usize, acc: &mut [Lanes; 10]);
     /// [`line_energy`].
     fn line_energy(line: &mut [LineBlock], a: f64, shift: f64, t: f64, acc: &mut [Lanes; 2]);
+    /// [`crate::jet::fit`], whole: its moments and residuals are per-sample loops, and its
+    /// 15 × 15 algebra runs along rows, which vectorise.
+    #[allow(clippy::too_many_arguments)]
+    fn jet_fit(
+        samples: &[Sample],
+        centre: &Point,
+        frame: &(Vector, Vector, Vector),
+        radius: f64,
+        config: &JetConfig,
+        slope_weight: Option<f64>,
+        scratch: &mut JetScratch
+    ) -> Option<JetFit>;
 }
 
 /// The instruction sets [`Kernels`] are compiled for, and the one this CPU runs.

@@ -123,8 +123,7 @@ impl Evaluator<'_> {
                 &local,
                 &frame,
                 radius,
-                config.degree,
-                config.normals,
+                config,
                 None,
                 &mut self.jet_scratch,
             ) else {
@@ -183,8 +182,7 @@ impl Evaluator<'_> {
                 &local,
                 &frame,
                 lead * h,
-                config.degree,
-                config.normals,
+                config,
                 Some(self.ladder[0].fit.slope_weight),
                 &mut self.jet_scratch,
             )

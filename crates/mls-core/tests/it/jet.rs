@@ -234,8 +234,10 @@ fn a_fit_takes_the_highest_degree_its_equations_determine() {
             &Point::origin(),
             &frame,
             1.0,
-            4,
-            normals,
+            &JetConfig {
+                normals,
+                ..JetConfig::default()
+            },
             None,
             &mut scratch,
         )
@@ -275,8 +277,10 @@ fn fit_at(
         &Point::origin(),
         &frame(&Vector::z()),
         radius,
-        4,
-        normals,
+        &JetConfig {
+            normals,
+            ..JetConfig::default()
+        },
         None,
         &mut JetScratch::default(),
     )
@@ -484,4 +488,39 @@ fn a_nearly_degenerate_layout_is_judged_by_its_relative_pivot() {
         assert_eq!(got, Some(want), "δ = {delta:e}: relative pivot {ratio:e}");
     }
     assert!(below > 0, "no layout just below the threshold");
+}
+
+/// The fit is compiled for the baseline and for AVX2 (`mls_core::kernels`); neither fuses a
+/// multiply with an add, so both give the same bits, with all slopes, with some, and without.
+#[test]
+fn the_fit_gives_the_same_bits_with_either_instruction_set() {
+    use mls_core::kernels::set_portable_kernels;
+    let mut samples = height_field(
+        300,
+        SEED,
+        |u, v| 0.3 * u * u - 0.2 * v * v + 0.1 * u * u * u * v,
+        |u, v| (0.6 * u + 0.3 * u * u * v, -0.4 * v + 0.1 * u * u * u),
+    );
+    let all_slopes = samples.clone();
+    // Normals past 60° from the frame give a height and no slope.
+    for s in samples.iter_mut().step_by(7) {
+        s.normal = Vector::new(0.9, 0.0, 0.3).normalize();
+    }
+    let fits = |portable: bool| {
+        set_portable_kernels(portable);
+        let fits: Vec<_> = [&all_slopes, &samples]
+            .into_iter()
+            .flat_map(|s| {
+                [0.3, 0.6, 0.84]
+                    .into_iter()
+                    .flat_map(|r| [NormalData::Slopes, NormalData::Ignore].map(|d| fit_at(s, r, d)))
+            })
+            .collect();
+        set_portable_kernels(false);
+        fits
+    };
+    let (best, portable) = (fits(false), fits(true));
+    assert!(best.iter().all(Option::is_some));
+    // Debug prints each f64 in its shortest round-trip form: equal text is equal bits.
+    assert_eq!(format!("{best:?}"), format!("{portable:?}"));
 }
