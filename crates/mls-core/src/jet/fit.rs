@@ -175,39 +175,21 @@ const EXPONENTS: [(usize, usize); 45] = {
     t
 };
 
-/// The first `K` monomials `u^p v^q` in the order of [`moment`], each a product of two powers
-/// (independent products, not a chain).
+/// The first `K` monomials `u^p v^q` in the order of [`moment`] into `out`, each a product of
+/// two powers (independent products, not a chain).
+///
+/// The fit is one inlined function (see [`jet_fit`]): its arrays are written in place, not
+/// returned, which there became copies through `memcpy`, and filled by loops, not
+/// `std::array::from_fn`, whose closures stayed out of line, compiled for the baseline.
 #[inline(always)]
-fn powers<const K: usize>(u: f64, v: f64) -> [f64; K] {
+fn powers<const K: usize>(u: f64, v: f64, out: &mut [f64; K]) {
     let (mut up, mut vp) = ([1.0; 9], [1.0; 9]);
     for i in 1..9 {
         up[i] = up[i - 1] * u;
         vp[i] = vp[i - 1] * v;
     }
-    std::array::from_fn(|k| {
-        let (p, q) = EXPONENTS[k];
-        up[p] * vp[q]
-    })
-}
-
-/// Calls `f` with each sample and its first `K` monomials ([`powers`]), for the moments.
-///
-/// The next sample's monomials are computed while `f` runs on this one's, into the other half
-/// of a double buffer. Read back right after being written, a 16-byte load spanning two of the
-/// stores that wrote them could not be forwarded and waited for the store buffer to drain
-/// (16 % of the time on a LiDAR tile). The residual passes, with fewer stores per sample, were
-/// 4 % slower with it.
-#[inline(always)]
-fn for_each_with_powers<const K: usize>(locals: &[Local], mut f: impl FnMut(&Local, &[f64; K])) {
-    let mut buffer = [[0.0; K]; 2];
-    if let Some(first) = locals.first() {
-        buffer[0] = powers::<K>(first.u, first.v);
-    }
-    for (i, l) in locals.iter().enumerate() {
-        if let Some(next) = locals.get(i + 1) {
-            buffer[(i + 1) & 1] = powers::<K>(next.u, next.v);
-        }
-        f(l, &buffer[i & 1]);
+    for (o, &(p, q)) in out.iter_mut().zip(&EXPONENTS) {
+        *o = up[p] * vp[q];
     }
 }
 
@@ -256,7 +238,20 @@ impl Moments {
         // Where every sample has a slope (the rule on a smooth surface) the slopes' weighted
         // moments are the heights' own, summed in the same order: copied, not summed twice.
         let all_slopes = locals.iter().all(|l| l.slope.is_some());
-        for_each_with_powers::<45>(locals, |l, p| {
+        // The next sample's monomials are computed while this one's are summed, into the
+        // other half of a double buffer. Read back right after being written, a 16-byte load
+        // spanning two of the stores that wrote them could not be forwarded and waited for the
+        // store buffer to drain (16 % of the time on a LiDAR tile). The residual passes, with
+        // fewer stores per sample, were 4 % slower with it.
+        let mut buffer = [[0.0; 45]; 2];
+        if let Some(first) = locals.first() {
+            powers(first.u, first.v, &mut buffer[0]);
+        }
+        for (i, l) in locals.iter().enumerate() {
+            if let Some(next) = locals.get(i + 1) {
+                powers(next.u, next.v, &mut buffer[(i + 1) & 1]);
+            }
+            let p = &buffer[i & 1];
             let (w, w2) = (l.w, l.w * l.w);
             for ((h, h2), &p) in m.h.iter_mut().zip(&mut m.h2).zip(p) {
                 *h += w * p;
@@ -282,7 +277,7 @@ impl Moments {
                 m.weight_s += 2.0 * w;
                 m.slope_samples += 1;
             }
-        });
+        }
         if all_slopes {
             let n = m.s.len();
             m.s.copy_from_slice(&m.h[..n]);
@@ -294,16 +289,19 @@ impl Moments {
     /// `Σ ω z φ`.
     #[inline(always)]
     fn height_rhs<const N: usize>(&self) -> [f64; N] {
-        std::array::from_fn(|a| self.hz[a])
+        let mut rhs = [0.0; N];
+        rhs.copy_from_slice(&self.hz[..N]);
+        rhs
     }
 
     /// `Σ ω (s_u ∂_u φ + s_v ∂_v φ)`.
     #[inline(always)]
     fn slope_rhs<const N: usize>(&self) -> [f64; N] {
-        std::array::from_fn(|a| {
-            let (fu, iu, fv, iv) = DERIVATIVE[a];
-            fu * self.su[iu] + fv * self.sv[iv]
-        })
+        let mut rhs = [0.0; N];
+        for (r, &(fu, iu, fv, iv)) in rhs.iter_mut().zip(&DERIVATIVE) {
+            *r = fu * self.su[iu] + fv * self.sv[iv];
+        }
+        rhs
     }
 }
 
@@ -403,27 +401,30 @@ const SLOPE_PRODUCT: [[(f64, usize, f64, usize); 15]; 15] = {
     t
 };
 
-/// `Σ ω φ φᵀ` of the heights from their moments `mu` (the lower triangle, mirrored).
+/// `Σ ω φ φᵀ` of the heights from their moments `mu`, into `m`.
 #[inline(always)]
-fn height_matrix<const N: usize>(mu: &[f64]) -> Square<N> {
-    symmetric(|a, b| mu[PRODUCT[a][b]])
+fn height_matrix<const N: usize>(mu: &[f64], m: &mut Square<N>) {
+    symmetric(m, |a, b| mu[PRODUCT[a][b]]);
 }
 
-/// `Σ ω (∂_u φ ∂_u φᵀ + ∂_v φ ∂_v φᵀ)` of the slopes from their moments `mu`.
+/// `Σ ω (∂_u φ ∂_u φᵀ + ∂_v φ ∂_v φᵀ)` of the slopes from their moments `mu`, into `m`.
 #[inline(always)]
-fn slope_matrix<const N: usize>(mu: &[f64]) -> Square<N> {
-    symmetric(|a, b| {
+fn slope_matrix<const N: usize>(mu: &[f64], m: &mut Square<N>) {
+    symmetric(m, |a, b| {
         let (fu, iu, fv, iv) = SLOPE_PRODUCT[a][b];
         fu * mu[iu] + fv * mu[iv]
-    })
+    });
 }
 
-/// The symmetric matrix with the lower-triangle entries `entry(a, b)`, `b ≤ a`.
+/// Fills `m` with the symmetric matrix of lower-triangle entries `entry(a, b)`, `b ≤ a`.
 #[inline(always)]
-fn symmetric<const N: usize>(entry: impl Fn(usize, usize) -> f64) -> Square<N> {
-    let mut m: Square<N> = std::array::from_fn(|a| std::array::from_fn(|b| entry(a, b.min(a))));
-    mirror(&mut m);
-    m
+fn symmetric<const N: usize>(m: &mut Square<N>, entry: impl Fn(usize, usize) -> f64) {
+    for (a, row) in m.iter_mut().enumerate() {
+        for (b, x) in row[..=a].iter_mut().enumerate() {
+            *x = entry(a, b);
+        }
+    }
+    mirror(m);
 }
 
 /// Solves the leading `N × N` block, with the slope equations weighted by the ratio of the
@@ -436,12 +437,17 @@ fn solve<const N: usize>(
     moments: &Moments,
     given: Option<f64>,
 ) -> Option<Solution> {
-    let (hp, hp2, sp, sp2) = (
-        height_matrix::<N>(&moments.h),
-        height_matrix::<N>(&moments.h2),
-        slope_matrix::<N>(&moments.s),
-        slope_matrix::<N>(&moments.s2),
-    );
+    let (mut hp, mut hp2, mut sp, mut sp2) =
+        ([[0.0; N]; N], [[0.0; N]; N], [[0.0; N]; N], [[0.0; N]; N]);
+    height_matrix(&moments.h, &mut hp);
+    height_matrix(&moments.h2, &mut hp2);
+    slope_matrix(&moments.s, &mut sp);
+    slope_matrix(&moments.s2, &mut sp2);
+    let mut factor = Factor {
+        l: [[0.0; N]; N],
+        inv_diag: [0.0; N],
+    };
+    let mut inv = [[0.0; N]; N];
     let (rp, rs) = (moments.height_rhs::<N>(), moments.slope_rhs::<N>());
     let (weight_h, weight_s) = (moments.weight_h, moments.weight_s);
     let use_slopes = normals == NormalData::Slopes && weight_s > 0.0;
@@ -455,11 +461,20 @@ fn solve<const N: usize>(
     for round in 0..rounds {
         // The covariance is kept from the last round only: its sandwich is formed there.
         let sandwich = use_slopes && round + 1 == rounds;
-        let a: Square<N> =
-            std::array::from_fn(|i| std::array::from_fn(|j| hp[i][j] + sp[i][j] * lambda));
-        let rhs: [f64; N] = std::array::from_fn(|i| rp[i] + rs[i] * lambda);
-        let factor = cholesky(&a)?;
-        let inv = factor.inverse();
+        // M = Mʰ + λ Mˢ, factored where it is formed.
+        for ((row, h), s) in factor.l.iter_mut().zip(&hp).zip(&sp) {
+            for ((x, h), s) in row.iter_mut().zip(h).zip(s) {
+                *x = h + s * lambda;
+            }
+        }
+        let mut rhs = rp;
+        for (x, s) in rhs.iter_mut().zip(&rs) {
+            *x += s * lambda;
+        }
+        if !factor.factor() {
+            return None;
+        }
+        factor.inverse(&mut inv);
         let mut c = [0.0; 15];
         c[..N].copy_from_slice(&factor.solve(&rhs));
         let (cu, cv) = gradient_coefficients(&c);
@@ -479,7 +494,9 @@ fn solve<const N: usize>(
         for l in locals {
             // Recomputed, not kept from the moments: storing them cost more than these
             // products (a store-to-load forwarding stall on the copy).
-            let p = &powers::<15>(l.u, l.v);
+            let mut p = [0.0; 15];
+            powers(l.u, l.v, &mut p);
+            let p = &p;
             let r = l.z - dot(&c, p);
             rss_h += l.w * r * r;
             let mut g = Vector::zeros();
@@ -571,45 +588,12 @@ fn trace_product<const N: usize>(a: &Square<N>, b: &Square<N>) -> f64 {
     diagonal + 2.0 * off
 }
 
-/// A Cholesky factor `L` (`LLᵀ = A`) with the reciprocals of its diagonal.
+/// A Cholesky factor `L` (`LLᵀ = A`) with the reciprocals of its diagonal, formed in place
+/// ([`Factor::factor`]).
 struct Factor<const N: usize> {
     /// `L` in the lower triangle and on the diagonal (the strict upper triangle is not read).
     l: Square<N>,
     inv_diag: [f64; N],
-}
-
-/// The lower Cholesky factor of the symmetric `a`, or `None` when a squared pivot falls below
-/// `1e-10` of the largest diagonal entry: the basis is then not determined by the samples (too
-/// few, or on a line), and fitting it would fit noise.
-///
-/// Right-looking (each column, then a rank-1 update of the rest): the updates are independent
-/// along a row, so they run as vector operations rather than one chain of dependent sums.
-#[inline(always)]
-fn cholesky<const N: usize>(a: &Square<N>) -> Option<Factor<N>> {
-    let max_diag = (0..N).map(|i| a[i][i]).fold(0.0f64, f64::max);
-    // Factored in place: column k of L replaces column k of what is left of `a`.
-    let mut l = *a;
-    let mut inv_diag = [0.0; N];
-    for k in 0..N {
-        let s = l[k][k];
-        if !(s > 1e-10 * max_diag) {
-            return None;
-        }
-        l[k][k] = s.sqrt();
-        inv_diag[k] = 1.0 / l[k][k];
-        let mut column = [0.0; N];
-        for i in k + 1..N {
-            column[i] = l[i][k] * inv_diag[k];
-            l[i][k] = column[i];
-        }
-        for i in k + 1..N {
-            let f = column[i];
-            for (r, c) in l[i][k + 1..=i].iter_mut().zip(&column[k + 1..=i]) {
-                *r -= f * c;
-            }
-        }
-    }
-    Some(Factor { l, inv_diag })
 }
 
 /// Copies the strict lower triangle of `m` onto the upper.
@@ -630,6 +614,39 @@ fn dot_prefix(x: &[f64], y: &[f64], n: usize) -> f64 {
 }
 
 impl<const N: usize> Factor<N> {
+    /// Replaces the symmetric matrix `A` held in `l` by its lower Cholesky factor; false when
+    /// a squared pivot falls below `1e-10` of the largest diagonal entry: the basis is then
+    /// not determined by the samples (too few, or on a line), and fitting it would fit noise.
+    ///
+    /// Right-looking (each column, then a rank-1 update of the rest): the updates are
+    /// independent along a row, so they run as vector operations rather than one chain of
+    /// dependent sums.
+    #[inline(always)]
+    fn factor(&mut self) -> bool {
+        let (l, inv_diag) = (&mut self.l, &mut self.inv_diag);
+        let max_diag = (0..N).map(|i| l[i][i]).fold(0.0f64, f64::max);
+        for k in 0..N {
+            let s = l[k][k];
+            if !(s > 1e-10 * max_diag) {
+                return false;
+            }
+            l[k][k] = s.sqrt();
+            inv_diag[k] = 1.0 / l[k][k];
+            let mut column = [0.0; N];
+            for i in k + 1..N {
+                column[i] = l[i][k] * inv_diag[k];
+                l[i][k] = column[i];
+            }
+            for i in k + 1..N {
+                let f = column[i];
+                for (r, c) in l[i][k + 1..=i].iter_mut().zip(&column[k + 1..=i]) {
+                    *r -= f * c;
+                }
+            }
+        }
+        true
+    }
+
     /// `x` with `LLᵀ x = b`, by forward and back substitution.
     #[inline(always)]
     fn solve(&self, b: &[f64; N]) -> [f64; N] {
@@ -649,7 +666,7 @@ impl<const N: usize> Factor<N> {
     /// `A⁻¹ = L⁻ᵀ L⁻¹`, from the rows of `L⁻¹` (each a combination of the rows above it) and
     /// their outer products: both as independent updates along a row, which vectorise.
     #[inline(always)]
-    fn inverse(&self) -> Square<N> {
+    fn inverse(&self, inv: &mut Square<N>) {
         let (l, d) = (&self.l, &self.inv_diag);
         // Row k of L⁻¹ is d_k (e_k − Σ_{m<k} l_km row_m); it vanishes past column k.
         let mut li = [[0.0; N]; N];
@@ -666,7 +683,7 @@ impl<const N: usize> Factor<N> {
             }
         }
         // (L⁻ᵀ L⁻¹)_ij = Σ_k li_ki li_kj, summed over the rows.
-        let mut inv = [[0.0; N]; N];
+        *inv = [[0.0; N]; N];
         for (k, row) in li.iter().enumerate() {
             for (i, &f) in row[..=k].iter().enumerate() {
                 for (x, r) in inv[i][..=i].iter_mut().zip(&row[..=i]) {
@@ -674,7 +691,6 @@ impl<const N: usize> Factor<N> {
                 }
             }
         }
-        mirror(&mut inv);
-        inv
+        mirror(inv);
     }
 }
