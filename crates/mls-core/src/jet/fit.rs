@@ -188,9 +188,34 @@ fn powers<const K: usize>(u: f64, v: f64, out: &mut [f64; K]) {
         up[i] = up[i - 1] * u;
         vp[i] = vp[i - 1] * v;
     }
-    for (o, &(p, q)) in out.iter_mut().zip(&EXPONENTS) {
-        *o = up[p] * vp[q];
+    // Written out, entry by entry with constant indices (checked against [`EXPONENTS`] at
+    // compile time): a loop over the table kept the indices as loads, 10 % of the run time.
+    macro_rules! monomials {
+        ($($k:literal => ($p:literal, $q:literal)),*) => {
+            $(
+                const { assert!(EXPONENTS[$k].0 == $p && EXPONENTS[$k].1 == $q) };
+                if $k < K {
+                    out[$k] = up[$p] * vp[$q];
+                }
+            )*
+        };
     }
+    #[rustfmt::skip]
+    monomials!(
+        0 => (0, 0),
+        1 => (1, 0), 2 => (0, 1),
+        3 => (2, 0), 4 => (1, 1), 5 => (0, 2),
+        6 => (3, 0), 7 => (2, 1), 8 => (1, 2), 9 => (0, 3),
+        10 => (4, 0), 11 => (3, 1), 12 => (2, 2), 13 => (1, 3), 14 => (0, 4),
+        15 => (5, 0), 16 => (4, 1), 17 => (3, 2), 18 => (2, 3), 19 => (1, 4),
+            20 => (0, 5),
+        21 => (6, 0), 22 => (5, 1), 23 => (4, 2), 24 => (3, 3), 25 => (2, 4),
+            26 => (1, 5), 27 => (0, 6),
+        28 => (7, 0), 29 => (6, 1), 30 => (5, 2), 31 => (4, 3), 32 => (3, 4),
+            33 => (2, 5), 34 => (1, 6), 35 => (0, 7),
+        36 => (8, 0), 37 => (7, 1), 38 => (6, 2), 39 => (5, 3), 40 => (4, 4),
+            41 => (3, 5), 42 => (2, 6), 43 => (1, 7), 44 => (0, 8)
+    );
 }
 
 /// Weighted moments of the support. A product of two monomials is a monomial, so every entry
