@@ -350,7 +350,9 @@ pub fn jet_candidates(
     };
     for j in 0..config.scales.max(1) {
         let rho = config.radius * h * 2f64.sqrt().powi(j as i32);
-        let Some(fitted) = fit_scale(rho, None, &mut frame) else {
+        // After the ladder's first fit, each scale takes its λ in one round.
+        let given = ladder.first().map(|w| w.slope_weight);
+        let Some(fitted) = fit_scale(rho, given, &mut frame) else {
             continue;
         };
         let Some((here, equations)) = fitted else {

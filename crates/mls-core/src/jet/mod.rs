@@ -22,7 +22,8 @@
 //! convention. The frame normal only has to be roughly right: the linear terms absorb a tilt.
 //!
 //! **Noise and predicted error.** The residuals of each kind of data give its noise estimate
-//! (`σ̂² = Σω r² / (Σω − tr(M⁻¹M₂))`, unbiased for independent noise) and λ, their ratio. The
+//! (`σ̂² = Σω r² / (Σω − tr(M⁻¹M₂))`, unbiased for independent noise) and λ, their ratio,
+//! found in a second solve at the ladder's first scale and taken by every later one. The
 //! coefficients' covariance is `σ̂² M⁻¹M₂M⁻¹` for heights alone and the cluster-robust
 //! sandwich (one cluster per sample) with slopes. Its (a20, a11, a02) block, pushed through
 //! the first-order change of each principal curvature

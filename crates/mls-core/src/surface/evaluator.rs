@@ -118,13 +118,15 @@ impl Evaluator<'_> {
             let Some(frame) = frame else {
                 return Err(PointStatus::NormalUndefined);
             };
+            // The ladder's first fit weighs the slopes in two rounds; the scales after it take
+            // its λ in one (the sandwich covariance holds for any λ; see [`JetConfig::lead`]).
             let Some(fit) = jet::fit(
                 &self.support,
                 &local,
                 &frame,
                 radius,
                 config,
-                None,
+                self.ladder.first().map(|p| p.fit.slope_weight),
                 &mut self.jet_scratch,
             ) else {
                 if best.is_some() {
