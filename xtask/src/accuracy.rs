@@ -581,7 +581,7 @@ const CONCLUSIONS: &str = "
   were, and costs 20 % more CPU time on the 200k sphere.
 - **Calibration** (observed RMS error / predicted, by decile of the prediction): 0.49–1.72 on the
   random, jittered, ellipsoid and noisy clouds, with file or estimated normals (one decile of the
-  10k random torus with file normals over-predicts by 2.04×); up to 2.5–3.2 on the scanlines'
+  10k random torus with file normals over-predicts by 2.08×); up to 2.5–3.2 on the scanlines'
   boundary points, where the issue sets no bound; on the grid with file normals the lowest
   deciles over-predict by up to 3.8× (the lead's errors there are smaller than its residuals
   say).
@@ -603,7 +603,17 @@ const CONCLUSIONS: &str = "
   2.3 GHz). Computing the moments twice adds 17 % to the sphere's time: the moments are no
   longer the bottleneck, and no single pass is. The lead scale (file normals) adds one small
   fit per point in one round: farm-bench A/B, CPU time, 1.21 on the 200k sphere (where a point
-  otherwise makes two fits) and 1.04 on a 100k LiDAR-like tile (five).
+  otherwise makes two fits) and 1.04 on a 100k LiDAR-like tile (five). Since then the fit runs
+  1.43× faster on the 1M sphere with file normals (curvature stage 14.0 s → 9.7 s, 71 k → 103 k
+  points/s on 2 cores; per CPU-second, one thread: 200k sphere 37.5 k → 53.6 k, the 100k LiDAR
+  tile 8.4 k → 10.9 k, the bunny with estimated normals 15.7 k → 17.8 k; the paper's method
+  130 k, 133 k and 116 k; Intel Xeon 2.3 GHz): its 15 × 15 algebra in right-looking forms that
+  vectorise (1.12×), the slopes' moments copied from the heights' where every sample has a
+  slope (1.05×), the whole fit compiled for AVX2 through the kernels' dispatch, with no
+  multiply-add fused, so the same bits (1.10×), its 45 monomials written out with constant
+  indices (1.10×), and every scale after the ladder's first solving once with the first's λ
+  instead of twice (1.11×; every k1 and k2 nRMS within 2 %, the table above). Farm-bench A/B
+  pairs, CPU time, 200k sphere; the 100k LiDAR tile gains 1.34× in all.
 
 ## Studied, not adopted
 
@@ -645,16 +655,27 @@ the default.
 - **Estimated normals as slopes** (the rows `estimated … Slopes`): 10–100× worse than heights
   alone (random 10k 4.7e-2, scanlines 5.0). A covariance normal is biased by the curvature over
   its own neighbourhood, and its errors are shared with the heights it came from.
-- **Faster per-sample passes** (farm-bench A/B pairs, CPU time, one thread). Four running sums
-  in the fit's small dense algebra (Cholesky, inverse, residual dots): 15 % slower on the
-  sphere. A structure-of-arrays support with 8-lane blocks in the moment and residual passes:
-  23 % slower. The moments summed eight at a time with the sums held in registers while the
-  samples stream past (bitwise the same results): 3 % slower on the LiDAR tile. Compiling for the
-  host CPU (AVX2, AVX-512, FMA): no measurable change on the sphere, 7 % faster on the LiDAR
-  tile. None is kept: the fit's cost is spread over moments, two factorisations and inverses,
-  and two residual passes, none of which is bound by arithmetic width. A real gain needs less
-  work per point, not faster loops: fewer scales or rounds under noise, which changes the
-  estimator and must go through this study again.
+- **Faster per-sample passes** (farm-bench A/B pairs, CPU time). Four running sums in the
+  fit's small dense algebra (Cholesky, inverse, residual dots): 15 % slower on the sphere. A
+  structure-of-arrays support with 8-lane blocks in the moment and residual passes: 23 % slower.
+  The moments summed eight at a time with the sums held in registers while the samples stream
+  past (bitwise the same results): 3 % slower on the LiDAR tile. The first two scales' neighbour
+  search shared by clusters of 16 queries in Morton order, as the paper's method does (the same
+  bits): no measurable change on the 200k or the 1M sphere (the search falls from 10 % to 4 % of
+  the time, and filtering each query's support from the cluster's costs as much). The slopes'
+  second-moment matrix formed only where a round needs their noise estimate: no measurable
+  change. What was kept is listed under Speed above.
+- **Jet normals as slopes when the file has none**: a first heights-only jet at every point, its
+  fitted normal (∇F/|∇F| at the foot point) then fitted as slopes by the default jet (seed 1,
+  `JET_REFINE` patch, not kept). On clean clouds it closes most of the gap to file normals (k1
+  nRMS: random 10k 4.1e-4 → 2.8e-4, 40k 3.0e-5 → 2.1e-5, jittered 5.0e-4 → 2.3e-4, grid
+  6.4e-4 → 2.5e-4, ellipsoid 1.6e-4 → 1.4e-4; within 1.5× of file normals on three of five), but
+  the scanlines get 12× worse (1.8e-2 → 2.3e-1: the first pass's normals are worst at the
+  boundary and the slopes spread it), the clean paper torus 2.5× worse (7.5e-6 → 1.8e-5), and
+  under noise the predicted error is 17–22× too small: the refined normals are smoothed over
+  their neighbours, so their errors are correlated, which the per-sample sandwich assumes they
+  are not. A second refinement pass changes little. It would need a covariance that knows the
+  slopes came from the same positions.
 
 ## Targets of issue 11
 
@@ -665,13 +686,14 @@ the default.
   torus has k1 μ = −8.1e-5 and σ = 3.2e-5 with file normals, −3.7e-5 and 4.0e-6 with estimated
   ones, and k2 within 2e-6 (targets |μ| ≤ 1e-4, σ ≤ 4.2e-4).
 - **Calibration:** within a factor 2 in every decile on the random and noisy clouds except one
-  decile of the 10k random torus with file normals, which over-predicts by 2.04×.
+  decile of the 10k random torus with file normals, which over-predicts by 2.08×.
 - **Not met:** estimated normals are 1.7–6× less accurate than
   file normals on the random, jittered, grid, scanline and ellipsoid clouds (target within
   1.5×). File normals are measurements the positions do not contain, and on clean clouds the
   jet's error is the truncation bias of its support; heights alone cannot match heights and
   slopes there (on the paper torus, where the slopes' truncation is the larger, they do better).
   The noisy torus with estimated normals has k1 σ 0.042 and 0.41 (the targets were measured with
-  exact normals). The jet's curvature stage is about 3.5× short of 250 k points/s on the 1M sphere
-  with file normals, 2.9× before the lead scale (the paper's method keeps that speed).
+  exact normals). The jet's curvature stage runs at 103 k points/s on the 1M sphere with file
+  normals on this 2-core Xeon (71 k before this study's speed work): 2.4× short of 250 k (the
+  paper's method, 227 k here, meets it on the faster EPYC of docs/benchmarks.md).
 ";

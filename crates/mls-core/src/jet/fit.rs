@@ -13,9 +13,8 @@ use super::{
 
 /// Fits a jet of `config`'s degree and normal data to the `samples` within the support radius
 /// `radius` of `centre` (the query, in the samples' frame), in the frame `(t1, t2, n)`. With
-/// slopes, `slope_weight` gives λ for a
-/// single round instead of the fit's own estimate (two rounds from λ = 1). Returns `None` when
-/// no degree ≥ 2 is determined.
+/// slopes, `slope_weight` gives λ for a single round instead of the fit's own estimate (two
+/// rounds from λ = 1). Returns `None` when no degree ≥ 2 is determined.
 ///
 /// Runs with the CPU's best [`crate::kernels`] (the same bits on each).
 pub fn fit(
@@ -32,7 +31,9 @@ pub fn fit(
 
 /// [`fit`], compiled into each of [`crate::kernels`]' instruction sets: it and everything it
 /// calls here are `#[inline(always)]`, since only inlined code takes on the features of the
-/// `#[target_feature]` copy.
+/// `#[target_feature]` copy. In the one function this makes, arrays are written in place, not
+/// returned (returned, they became copies through `memcpy`), and filled by loops, not
+/// `std::array::from_fn` (whose closures stayed out of line, compiled for the baseline).
 #[inline(always)]
 pub(crate) fn jet_fit(
     samples: &[Sample],
@@ -177,10 +178,6 @@ const EXPONENTS: [(usize, usize); 45] = {
 
 /// The first `K` monomials `u^p v^q` in the order of [`moment`] into `out`, each a product of
 /// two powers (independent products, not a chain).
-///
-/// The fit is one inlined function (see [`jet_fit`]): its arrays are written in place, not
-/// returned, which there became copies through `memcpy`, and filled by loops, not
-/// `std::array::from_fn`, whose closures stayed out of line, compiled for the baseline.
 #[inline(always)]
 fn powers<const K: usize>(u: f64, v: f64, out: &mut [f64; K]) {
     let (mut up, mut vp) = ([1.0; 9], [1.0; 9]);
