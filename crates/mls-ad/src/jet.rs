@@ -350,8 +350,9 @@ pub fn jet_candidates(
     };
     for j in 0..config.scales.max(1) {
         let rho = config.radius * h * 2f64.sqrt().powi(j as i32);
-        // After the ladder's first fit, each scale takes its λ in one round.
-        let given = ladder.first().map(|w| w.slope_weight);
+        // After the ladder's first fit, each scale takes its λ in one round (unless it is 0:
+        // that fit had no slopes).
+        let given = ladder.first().map(|w| w.slope_weight).filter(|&l| l > 0.0);
         let Some(fitted) = fit_scale(rho, given, &mut frame) else {
             continue;
         };
@@ -406,7 +407,7 @@ pub fn jet_candidates(
     if slopes && config.lead {
         let rho = config.radius / 2f64.sqrt() * h;
         let full = config.degree.clamp(2, 4);
-        let given = Some(ladder[0].slope_weight);
+        let given = Some(ladder[0].slope_weight).filter(|&l| l > 0.0);
         if let Some(Some((here, equations))) = fit_scale(rho, given, &mut frame)
             && here.degree == full
             && equations as f64 >= 3.0 * ((full + 1) * (full + 2) / 2) as f64

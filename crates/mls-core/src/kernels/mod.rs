@@ -57,9 +57,9 @@ pub(crate) use dispatch;
 /// compiled into both.
 macro_rules! kernels {
     ($($(#[$doc:meta])* fn $name:ident($($arg:ident: $ty:ty),*) $(-> $ret:ty)?;)*) => {
-        /// The per-sample loops, compiled for one instruction set. They are the only code whose
-        /// cost grows with the number of samples; the per-point algebra around them is the same
-        /// for all.
+        /// The per-sample loops and the jet's fit, compiled for one instruction set. They are
+        /// the only code whose cost grows with the number of samples; the field's per-point
+        /// algebra around them is the same for all.
         pub(crate) trait Kernels: Copy {
             $($(#[$doc])* fn $name(self, $($arg: $ty),*) $(-> $ret)?;)*
         }

@@ -119,14 +119,14 @@ impl Evaluator<'_> {
                 return Err(PointStatus::NormalUndefined);
             };
             // The ladder's first fit weighs the slopes in two rounds; the scales after it take
-            // its λ in one (the sandwich covariance holds for any λ; see [`JetConfig::lead`]).
+            // its λ in one (the sandwich covariance holds for any λ; docs/derivation.md).
             let Some(fit) = jet::fit(
                 &self.support,
                 &local,
                 &frame,
                 radius,
                 config,
-                self.ladder.first().map(|p| p.fit.slope_weight),
+                self.handed_slope_weight(),
                 &mut self.jet_scratch,
             ) else {
                 if best.is_some() {
@@ -185,7 +185,7 @@ impl Evaluator<'_> {
                 &frame,
                 lead * h,
                 config,
-                Some(self.ladder[0].fit.slope_weight),
+                self.handed_slope_weight(),
                 &mut self.jet_scratch,
             )
             .filter(|f| f.degree == config.degree.clamp(2, 4) && jet::trusted(f));
@@ -195,6 +195,15 @@ impl Evaluator<'_> {
             }
         }
         Ok(jet::choose_scale(&self.ladder, accepted))
+    }
+
+    /// The λ the ladder's first fit found, for the fits after it; none where that fit had no
+    /// slope to weigh (λ = 0), so that a later scale with slopes weighs its own.
+    fn handed_slope_weight(&self) -> Option<f64> {
+        self.ladder
+            .first()
+            .map(|p| p.fit.slope_weight)
+            .filter(|&l| l > 0.0)
     }
 
     /// Collects into the internal buffer the samples within `radius` of `x` (all samples when
