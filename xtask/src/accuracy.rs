@@ -579,7 +579,7 @@ const CONCLUSIONS: &str = "
   2.00e-4, grid 3.01e-4 → 2.18e-4, ellipsoid 1.00e-4 → 9.45e-5, paper torus 2.14e-5 → 1.74e-5
   with its k1 mean from −1.1e-4 to −8.1e-5), leaves the scanlines and the noisy clouds as they
   were, and costs 20 % more CPU time on the 200k sphere.
-- **Calibration** (observed RMS error / predicted, by decile of the prediction): 0.49–1.72 on the
+- **Calibration** (observed RMS error / predicted, by decile of the prediction): 0.48–1.72 on the
   random, jittered, ellipsoid and noisy clouds, with file or estimated normals (one decile of the
   10k random torus with file normals over-predicts by 2.08×); up to 2.5–3.2 on the scanlines'
   boundary points, where the issue sets no bound; on the grid with file normals the lowest
