@@ -598,11 +598,11 @@ const CONCLUSIONS: &str = "
   200k sphere and 79 k for `--method paper` on the same tile (one thread, user time). Since
   then one stall is gone: each sample's 45 monomials were read back right after being written,
   with 16-byte loads spanning two of the stores, which the CPU cannot forward; computed one
-  sample ahead into a double buffer they are not (bitwise the same results; farm-bench A/B,
+  sample ahead into a double buffer they are not (bitwise the same results; A/B pairs,
   2 threads, CPU time: 0.89 on the 300k LiDAR tile, 0.95 on the 200k sphere, Intel Xeon
   2.3 GHz). Computing the moments twice adds 17 % to the sphere's time: the moments are no
   longer the bottleneck, and no single pass is. The lead scale (file normals) adds one small
-  fit per point in one round: farm-bench A/B, CPU time, 1.21 on the 200k sphere (where a point
+  fit per point in one round: A/B pairs, CPU time, 1.21 on the 200k sphere (where a point
   otherwise makes two fits) and 1.04 on a 100k LiDAR-like tile (five). Since then the fit runs
   1.43× faster on the 1M sphere with file normals (curvature stage 14.0 s → 9.7 s, 71 k → 103 k
   points/s on 2 cores; per CPU-second, one thread: 200k sphere 37.5 k → 53.6 k, the 100k LiDAR
@@ -612,7 +612,7 @@ const CONCLUSIONS: &str = "
   slope (1.05×), the whole fit compiled for AVX2 through the kernels' dispatch, with no
   multiply-add fused, so the same bits (1.10×), its 45 monomials written out with constant
   indices (1.10×), and every scale after the ladder's first solving once with the first's λ
-  instead of twice (1.11×; every k1 and k2 nRMS within 2 %, the table above). Farm-bench A/B
+  instead of twice (1.11×; every k1 and k2 nRMS within 2 %, the table above). Whole-process A/B
   pairs, CPU time, 200k sphere; the 100k LiDAR tile gains 1.34× in all.
 
 ## Studied, not adopted
@@ -655,7 +655,7 @@ the default.
 - **Estimated normals as slopes** (the rows `estimated … Slopes`): 10–100× worse than heights
   alone (random 10k 4.7e-2, scanlines 5.0). A covariance normal is biased by the curvature over
   its own neighbourhood, and its errors are shared with the heights it came from.
-- **Faster per-sample passes** (farm-bench A/B pairs, CPU time). Four running sums in the
+- **Faster per-sample passes** (whole-process A/B pairs, CPU time). Four running sums in the
   fit's small dense algebra (Cholesky, inverse, residual dots): 15 % slower on the sphere. A
   structure-of-arrays support with 8-lane blocks in the moment and residual passes: 23 % slower.
   The moments summed eight at a time with the sums held in registers while the samples stream
