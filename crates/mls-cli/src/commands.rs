@@ -93,9 +93,9 @@ pub fn curvature(a: CurvatureArgs) -> Result<()> {
             eprintln!("  points read     {n}");
             if a.adaptive {
                 eprintln!(
-                    "  h               adaptive, per point from {:.6} to {:.6}",
-                    scale.h,
-                    AdaptiveConfig::new(scale.h).h_max()
+                    "  h               adaptive, per point from {} to {}",
+                    pipeline::Length(scale.h),
+                    pipeline::Length(AdaptiveConfig::new(scale.h).h_max())
                 );
                 eprintln!("  smallest h      {}", scale.describe(H_OPTIONS));
                 eprintln!("  chosen h        {}", pipeline::percentiles(&out.h));
@@ -227,12 +227,12 @@ fn curvature_tiled(
         eprintln!("  points read     {}", r.points);
         eprintln!("  h               {}", r.scale.describe(H_OPTIONS));
         eprintln!(
-            "  tiles           {} within {} MiB: at most {} points loaded in one, {:.3} loaded per point (halo {:.6})",
+            "  tiles           {} within {} MiB: at most {} points loaded in one, {:.3} loaded per point (halo {})",
             r.tiles,
             budget >> 20,
             r.largest_tile,
             r.load_factor,
-            r.reach
+            pipeline::Length(r.reach)
         );
         eprintln!("  normals         {}", r.normals_source);
         if let Some((agree, compared)) = r.agreement {

@@ -6,7 +6,7 @@ use anyhow::{Context as _, Result, anyhow};
 use mls_core::normals::{DEFAULT_NEIGHBOURS, NeighbourGraph, orientation_consistency};
 use mls_core::{IndexedCloud, Parallelism, Vector};
 
-use mls_cli::pipeline;
+use mls_cli::pipeline::{self, Length};
 
 use crate::InfoArgs;
 
@@ -39,13 +39,20 @@ fn info_report(a: &InfoArgs, out: &mut String) -> Result<()> {
             (lo.inf(&p.coords), hi.sup(&p.coords))
         });
     println!(
-        "bounding box    [{:.6}, {:.6}, {:.6}] .. [{:.6}, {:.6}, {:.6}]",
-        lo.x, lo.y, lo.z, hi.x, hi.y, hi.z
+        "bounding box    [{}, {}, {}] .. [{}, {}, {}]",
+        Length(lo.x),
+        Length(lo.y),
+        Length(lo.z),
+        Length(hi.x),
+        Length(hi.y),
+        Length(hi.z)
     );
     let size = hi - lo;
     println!(
-        "size            {:.6} × {:.6} × {:.6}",
-        size.x, size.y, size.z
+        "size            {} × {} × {}",
+        Length(size.x),
+        Length(size.y),
+        Length(size.z)
     );
     let name = pipeline::input_name(&a.input);
     // One tree for the spacing and the normals' neighbour graph, as in the other commands.
@@ -76,12 +83,16 @@ fn info_report(a: &InfoArgs, out: &mut String) -> Result<()> {
         Ok(scale) => {
             if let Some(Ok(s)) = full {
                 println!(
-                    "spacing         {:.6} (median local); nearest neighbour min {:.6}, median {:.6}, p90 {:.6}, max {:.6}",
-                    s.spacing, s.nearest.min, s.nearest.median, s.nearest.p90, s.nearest.max
+                    "spacing         {} (median local); nearest neighbour min {}, median {}, p90 {}, max {}",
+                    Length(s.spacing),
+                    Length(s.nearest.min),
+                    Length(s.nearest.median),
+                    Length(s.nearest.p90),
+                    Length(s.nearest.max)
                 );
                 println!("duplicates      {}", s.duplicates);
             }
-            println!("suggested h     {:.6} = {}", scale.h, scale.why);
+            println!("suggested h     {} = {}", Length(scale.h), scale.why);
         }
         Err(e) => println!("spacing         unavailable: {e:#}"),
     }
@@ -124,7 +135,12 @@ fn info_report(a: &InfoArgs, out: &mut String) -> Result<()> {
         );
         for (s, origin) in scans.origins.iter().enumerate() {
             if let Some([x, y, z]) = origin {
-                println!("  scan {s:<9} scanner at ({x:.6}, {y:.6}, {z:.6})");
+                println!(
+                    "  scan {s:<9} scanner at ({}, {}, {})",
+                    Length(*x),
+                    Length(*y),
+                    Length(*z)
+                );
             }
         }
     }

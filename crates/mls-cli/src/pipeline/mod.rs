@@ -28,6 +28,23 @@ pub use self::oriented::{Normals, check_file_normals, normals, scan_viewpoints};
 pub use self::scale::{Scale, check_scale, choose_h_on, print_warning};
 pub use crate::output::{Carried, Output, check_output, write_stdout};
 
+/// A length for a summary line: six decimals where they show its digits (from 1e-3 to below
+/// 1e9 in the file's units), else six significant digits with an exponent, so that a stray
+/// 1e300 coordinate or a scan in kilometres reads as a number, not as 300 digits or 0.000000.
+#[derive(Clone, Copy, Debug)]
+pub struct Length(pub f64);
+
+impl std::fmt::Display for Length {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let x = self.0;
+        if x == 0.0 || !x.is_finite() || (1e-3..1e9).contains(&x.abs()) {
+            write!(f, "{x:.6}")
+        } else {
+            write!(f, "{x:.5e}")
+        }
+    }
+}
+
 /// The smallest cloud a neighbourhood can be built from: a covariance normal needs 3 points
 /// besides the centre, the MLS evaluation at least 3 samples.
 pub const MIN_POINTS: usize = 4;

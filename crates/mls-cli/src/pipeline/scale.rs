@@ -5,6 +5,8 @@ use anyhow::{Context, Result, bail};
 use mls_core::normals::{DEFAULT_SPACING_NEIGHBOURS, SpacingStats, suggest_h};
 use mls_core::{Cutoff, IndexedCloud, Parallelism, Point};
 
+use super::Length;
+
 /// The chosen h and a sentence on why.
 #[derive(Debug)]
 pub struct Scale {
@@ -21,9 +23,9 @@ impl Scale {
     /// h and where it came from, for a summary line; `options` names how to change it.
     pub fn describe(&self, options: &str) -> String {
         if self.spacing.is_some() {
-            format!("{:.6} = {}; {options} to change", self.h, self.why)
+            format!("{} = {}; {options} to change", Length(self.h), self.why)
         } else {
-            format!("{:.6}, {}", self.h, self.why)
+            format!("{}, {}", Length(self.h), self.why)
         }
     }
 }
@@ -76,10 +78,11 @@ pub fn check_scale(
     }
     if h > MAX_H_OVER_DIAGONAL * diagonal {
         bail!(
-            "{file}: h = {h} is {:.0} times the diagonal {diagonal:.6} of the cloud's bounding box: \
+            "{file}: h = {h} is {:.0} times the diagonal {} of the cloud's bounding box: \
              every point would weigh alike and the curvature would be that of one blob, not of the \
              surface; choose h well below the size of the cloud (`mlscurv info` suggests one)",
-            h / diagonal
+            h / diagonal,
+            Length(diagonal)
         );
     }
     // The weight is 1.2e-4 at 3h: what lies within 3h is what shapes the surface. The cutoff
@@ -113,12 +116,14 @@ pub fn check_scale(
     let mut warnings = Vec::new();
     if h > diagonal {
         warnings.push(format!(
-            "h = {h} exceeds the cloud's extent (bounding-box diagonal {diagonal:.6})"
+            "h = {h} exceeds the cloud's extent (bounding-box diagonal {})",
+            Length(diagonal)
         ));
     } else if fraction > 0.5 {
         warnings.push(format!(
-            "h = {h}: the kernel's weight (within 3h = {weighty:.6}) spans on average {:.0}% of \
+            "h = {h}: the kernel's weight (within 3h = {}) spans on average {:.0}% of \
              the {n} points",
+            Length(weighty),
             100.0 * fraction
         ));
     }
@@ -142,9 +147,10 @@ pub fn check_scale(
     if warnings.is_empty() && neighbours < MIN_NEAR_SAMPLES {
         warnings.push(format!(
             "h = {h}: a point has on average {neighbours:.1} other samples within 2h = \
-             {near:.6}, where the weight is above 0.018: too few for a fit, so points may fail \
+             {}, where the weight is above 0.018: too few for a fit, so points may fail \
              and the curvature follows the sampling more than the surface (the default h, 2 × \
-             the median local spacing, has about 50; `mlscurv info` suggests one)"
+             the median local spacing, has about 50; `mlscurv info` suggests one)",
+            Length(near)
         ));
     }
     if per_point > SLOW_SUPPORT {
@@ -152,7 +158,7 @@ pub fn check_scale(
             "h = {h}: the kernel's support ({}) holds about {per_point:.0} of the {n} points at \
              each evaluation; expect a long run",
             match support {
-                Some(r) => format!("cutoff {r:.6}"),
+                Some(r) => format!("cutoff {}", Length(r)),
                 None => "no cutoff".to_owned(),
             }
         ));
@@ -208,8 +214,9 @@ fn choose_h_from(
     Ok(Scale {
         h,
         why: format!(
-            "{factor} × median local spacing {:.6} over {} neighbours{at}",
-            stats.spacing, stats.k
+            "{factor} × median local spacing {} over {} neighbours{at}",
+            Length(stats.spacing),
+            stats.k
         ),
         spacing: Some(stats),
         factor: Some(factor),

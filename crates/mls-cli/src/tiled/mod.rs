@@ -391,9 +391,9 @@ fn sampled_scale(
     Ok(Scale {
         h,
         why: format!(
-            "{factor} × median local spacing {:.6} over {} neighbours at {} of the {} points in \
+            "{factor} × median local spacing {} over {} neighbours at {} of the {} points in \
              {take} of {} tiles",
-            stats.spacing,
+            crate::pipeline::Length(stats.spacing),
             stats.k,
             stats.measured,
             points.len(),

@@ -85,3 +85,41 @@ fn info_reports_randomly_flipped_normals_as_not_consistently_oriented() {
     let normals = field(&info(&path), "normals").to_owned();
     assert!(normals.contains("NOT consistently oriented"), "{normals}");
 }
+
+/// The numbers of a `label` line, in order (brackets, commas and `×` stripped).
+fn numbers(stdout: &str, label: &str) -> Vec<f64> {
+    field(stdout, label)
+        .split(|c: char| c.is_whitespace() || "[],×".contains(c))
+        .filter_map(|w| w.parse().ok())
+        .collect()
+}
+
+#[test]
+fn info_prints_huge_and_tiny_lengths_with_their_digits() {
+    let dir = tempfile::tempdir().unwrap();
+    // A stray coordinate of 1e300: the box must read as 1e300, not as 300 digits.
+    let huge = dir.path().join("huge.xyz");
+    let mut p: Vec<[f64; 3]> = (0..50).map(|i| [f64::from(i), 1.0, 2.0]).collect();
+    p.push([1e300, 1.0, 2.0]);
+    write_xyz(&huge, &p, None);
+    let out = info(&huge);
+    let line = field(&out, "bounding box");
+    assert!(line.len() < 100, "{line}");
+    assert_eq!(
+        numbers(&out, "bounding box"),
+        [0.0, 1.0, 2.0, 1e300, 1.0, 2.0]
+    );
+    assert_eq!(numbers(&out, "size"), [1e300, 0.0, 0.0]);
+    // A grid of pitch 2.5e-6: six decimals would print its spacing as 0.000003.
+    let tiny = dir.path().join("tiny.xyz");
+    let pitch = 2.5e-6;
+    let p: Vec<[f64; 3]> = (0..400)
+        .map(|i| [f64::from(i % 20) * pitch, f64::from(i / 20) * pitch, 0.0])
+        .collect();
+    write_xyz(&tiny, &p, None);
+    let out = info(&tiny);
+    let spacing = numbers(&out, "spacing")[0];
+    assert!((spacing / pitch - 1.0).abs() < 1e-5, "{out}");
+    let h = suggested_h(&out);
+    assert!((h / (2.0 * pitch) - 1.0).abs() < 1e-5, "{out}");
+}
