@@ -154,3 +154,68 @@ fn jet_matches_its_witness_with_and_without_slopes() {
     assert_eq!(compared, cases.len() * 2 * 24);
     eprintln!("worst k1, k2, predicted error, in units of their thresholds: {worst:?}");
 }
+
+/// Where the ladder's first supports hold no slope they can fit (every normal within 2.3 h
+/// leans about 70°, alternately either way, so that their mean is still upright) but the larger
+/// ones do, the λ of 0 of the first fit the ladder keeps is not handed on: each later scale
+/// weighs its slopes itself. Under noise the ladder climbs and a later scale is chosen, so a 0
+/// handed on (heights only above the first scales) would move k away from the witness
+/// (cargo-mutants' `l > 0` → `l >= 0` in `handed_slope_weight`).
+#[test]
+fn a_first_support_without_slopes_hands_no_noise_ratio_on() {
+    let mut rng = ChaCha8Rng::seed_from_u64(0x5eed_0004);
+    let n = 2500;
+    let h = 2.0 / (n as f64).sqrt();
+    let inner = 2.3 * h;
+    let (points, mut normals) = patch(&mut rng, n, (5e-3, 0.02, 0.0, 0.0));
+    for (i, (p, v)) in points.iter().zip(normals.iter_mut()).enumerate() {
+        if p.x.hypot(p.y) < inner {
+            let side = if i % 2 == 0 { 2.7 } else { -2.7 };
+            *v = (*v + Vector::new(side, 0.0, 0.0)).normalize();
+        }
+    }
+    let surface = MlsSurface::new(&points, &normals, MlsConfig::new(h)).unwrap();
+    let samples: Vec<Sample> = points
+        .iter()
+        .zip(&normals)
+        .map(|(p, v)| Sample {
+            point: *p,
+            normal: *v,
+        })
+        .collect();
+    let queries: Vec<Point> = (0..16)
+        .map(|_| {
+            let (x, y) = (
+                rng.random_range(-0.1..0.1) * h,
+                rng.random_range(-0.1..0.1) * h,
+            );
+            Point::new(x, y, height(x, y, 0.0).0)
+        })
+        .collect();
+    let config = JetConfig::default();
+    let mut later_with_slopes = 0;
+    for (x, r) in queries
+        .iter()
+        .zip(surface.jet_at_points(&queries, &config, Parallelism::Rayon))
+    {
+        let j = r.unwrap();
+        let w = mls_ad::jet_witness(&x.coords, &samples, h, &config).unwrap();
+        assert_eq!(j.fit.radius, w.radius, "at {x:?}");
+        if j.fit.radius > config.radius * h * 1.01 && w.slope_weight > 0.0 {
+            later_with_slopes += 1;
+        }
+        let kappa = w.k1.abs().max(w.k2.abs()).max(1.0 / h);
+        let tolerance = (1e3 * f64::EPSILON * w.condition).max(K_THRESHOLD);
+        for (got, want) in [(j.curvature.k1, w.k1), (j.curvature.k2, w.k2)] {
+            assert!(
+                (got - want).abs() <= tolerance * kappa,
+                "at {x:?}: {got} against {want} (radius {}, λ {} against {})",
+                w.radius,
+                j.fit.slope_weight,
+                w.slope_weight
+            );
+        }
+    }
+    // The case the test is for: a chosen scale above the first, with slopes of its own.
+    assert!(later_with_slopes >= 8, "{later_with_slopes} of 16");
+}

@@ -716,3 +716,23 @@ impl<const N: usize> Factor<N> {
         mirror(inv);
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A squared pivot at exactly `1e-10` of the largest diagonal entry leaves the basis
+    /// undetermined; twice that is factored.
+    #[test]
+    fn a_pivot_at_the_threshold_is_refused() {
+        let at = |pivot: f64| {
+            let mut f = Factor::<2> {
+                l: [[1.0, 0.0], [0.0, pivot]],
+                inv_diag: [0.0; 2],
+            };
+            f.factor()
+        };
+        assert!(!at(1e-10));
+        assert!(at(2e-10));
+    }
+}
