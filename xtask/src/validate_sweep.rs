@@ -356,7 +356,8 @@ impl Ctx<'_> {
     }
 
     /// e′, e″ of production's line code against hyper-dual derivatives of the energy, on
-    /// lines through the queries in directions near the surface normal, at t within ±h.
+    /// lines through the queries in directions near the surface normal, at t within ±h and
+    /// near 0.
     fn check_lines(
         &self,
         tally: &mut Tally,
@@ -372,7 +373,14 @@ impl Ctx<'_> {
                 rng.random_range(-0.3..0.3),
             );
             let n = (n + tilt).normalize();
-            let t = rng.random_range(-1.0..1.0) * self.h;
+            // Half within ±h, where the line code sums the samples; half at |t| from 1e-10 h
+            // to h/10, log-uniform, where it sums its series (`projection::LineSeries`).
+            let t = if rng.random_bool(0.5) {
+                rng.random_range(-1.0..1.0) * self.h
+            } else {
+                let sign = if rng.random_bool(0.5) { 1.0 } else { -1.0 };
+                sign * 10f64.powf(rng.random_range(-10.0..-1.0)) * self.h
+            };
             let support = mls_ad::support(&x.coords, self.samples, reach);
             if support.is_empty() {
                 continue;

@@ -12,7 +12,7 @@
 //! change; g, ∇g and H are scaled by that constant, which curvature does not see.
 //! [`Implicit::log_scale`] records it.
 
-use crate::kernels::{Block, Kernels, LANES, dispatch, per_lane};
+use crate::kernels::{Block, Kernels, LANES, LINE_MOMENTS, LineMoments, dispatch, per_lane};
 use crate::math::{Matrix, Point, Vector};
 use crate::status::PointStatus;
 
@@ -84,6 +84,8 @@ pub struct FieldScratch {
     inv_h2: f64,
     /// The smallest `|d|²` loaded, `δ²/h²`.
     shift: f64,
+    /// Blocks whose weights [`Self::loaded_normal`] computed, for [`Self::line_moments`].
+    weighed: usize,
 }
 
 impl FieldScratch {
@@ -103,6 +105,7 @@ impl FieldScratch {
         self.len = len;
         self.inv_h2 = inv_h2;
         self.shift = shift;
+        self.weighed = 0;
         len
     }
 }
@@ -114,10 +117,8 @@ impl FieldScratch {
         if self.len == 0 {
             return Err(PointStatus::NoNeighbours);
         }
-        let blocks = &mut self.blocks[..self.len.div_ceil(LANES)];
-        self.len = 0;
-        let shift = self.shift;
-        let weight_sum = dispatch!(k => k.weights(blocks, shift));
+        let weight_sum = self.weigh_loaded();
+        let blocks = &self.blocks[..self.weighed];
         let m = Vector::from_fn(|c, _| {
             let mut sum = [0.0; LANES];
             for block in blocks.iter() {
@@ -130,6 +131,31 @@ impl FieldScratch {
             return Err(PointStatus::NormalUndefined);
         }
         Ok(m / r)
+    }
+
+    /// The shifted weights of the samples last loaded, in place of their squared lengths (the
+    /// samples are then no longer loaded for [`evaluate_loaded`]); returns `Σ w`.
+    pub(crate) fn weigh_loaded(&mut self) -> f64 {
+        let end = self.len.div_ceil(LANES);
+        self.len = 0;
+        self.weighed = end;
+        let shift = self.shift;
+        dispatch!(k => k.weights(&mut self.blocks[..end], shift))
+    }
+
+    /// The moments along the line through the loaded point in direction `n` of the samples
+    /// [`Self::weigh_loaded`] last weighed.
+    pub(crate) fn line_moments(&self, n: &Vector) -> LineMoments {
+        let blocks = &self.blocks[..self.weighed];
+        let (mut mu, mut reach, mut toward) =
+            ([[0.0; LANES]; LINE_MOMENTS], [0.0; LANES], [0.0; LANES]);
+        dispatch!(k => k.line_moments(blocks, n, &mut mu, &mut reach, &mut toward));
+        LineMoments {
+            mu: mu.map(|m| m.iter().sum()),
+            reach: reach.iter().fold(0.0, |m: f64, &r| m.max(r)),
+            toward: toward.iter().sum(),
+            log_scale: self.shift,
+        }
     }
 }
 
@@ -321,7 +347,7 @@ mod isa_tests {
     use rand_chacha::ChaCha8Rng;
 
     use super::*;
-    use crate::kernels::{Avx2, LineBlock, Portable};
+    use crate::kernels::{Avx2, Lanes, LineBlock, Portable};
 
     fn run(kernels: impl Kernels, x: &Point, samples: &[Sample]) -> Result<Implicit, PointStatus> {
         let mut scratch = FieldScratch::default();
@@ -330,6 +356,23 @@ mod isa_tests {
         let (len, shift) = kernels.load_blocks(&mut scratch.blocks, x, samples, 0.25, 100.0);
         (scratch.len, scratch.inv_h2, scratch.shift) = (len, 100.0, shift);
         evaluate_with(kernels, &mut scratch)
+    }
+
+    /// The line moments' per-lane sums along `x + t n`, by `kernels`.
+    fn line_moments_with(
+        kernels: impl Kernels,
+        x: &Point,
+        samples: &[Sample],
+        n: &Vector,
+    ) -> ([Lanes; LINE_MOMENTS], Lanes, Lanes) {
+        let mut scratch = FieldScratch::default();
+        scratch.load(x, samples, f64::INFINITY, 100.0);
+        scratch.weigh_loaded();
+        let (mut mu, mut reach, mut toward) =
+            ([[0.0; LANES]; LINE_MOMENTS], [0.0; LANES], [0.0; LANES]);
+        let blocks = &scratch.blocks[..scratch.weighed];
+        kernels.line_moments(blocks, n, &mut mu, &mut reach, &mut toward);
+        (mu, reach, toward)
     }
 
     #[test]
@@ -397,6 +440,14 @@ mod isa_tests {
                 assert!(p[0].iter().all(|v| v.is_finite() && *v != 0.0));
                 assert_eq!(p, q);
             }
+
+            // The moments of the projection's series along that line, from the weighed blocks.
+            let by_portable = line_moments_with(Portable, &x, &samples[..599], &n);
+            assert!(by_portable.0[LINE_MOMENTS - 1].iter().all(|v| *v != 0.0));
+            assert_eq!(
+                by_portable,
+                line_moments_with(avx2, &x, &samples[..599], &n)
+            );
         }
     }
 }

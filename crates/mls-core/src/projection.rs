@@ -8,8 +8,8 @@
 //! about ±h off the surface. The search walks downhill and brackets a sign change of e' from
 //! negative to positive (in the walking direction), so it only ever stops where `e'' ≥ 0`.
 
-use crate::field::Sample;
-use crate::kernels::{Kernels, LineBlock, dispatch};
+use crate::field::{FieldScratch, Sample};
+use crate::kernels::{Kernels, LineBlock, LineMoments, dispatch};
 use crate::math::{Point, Vector};
 
 /// Stopping rules of the projection.
@@ -45,10 +45,118 @@ fn energy_derivatives(line: &mut [LineBlock], a: f64, shift: f64, t: f64) -> (f6
     (acc[0].iter().sum(), acc[1].iter().sum())
 }
 
+/// Terms of the exponential's Taylor series in [`LineSeries`]: `(−2atb)^m/m!`, `m ≤ 15`. The
+/// derivatives then need the moments up to `b^(15 + 4)`, and the remainder's bound `b^16`.
+const SERIES_ORDER: usize = 15;
+
+/// Where the remainder of the series may reach, relative to `Σ w`: below the rounding of the
+/// direct sum, whose terms add up to at least `Σ w` (e″'s leading term is `2 Σ w`).
+const SERIES_TOLERANCE: f64 = 1e-16;
+
+/// `1/(SERIES_ORDER + 1)!`.
+const INV_FACTORIAL_16: f64 = 1.0 / 20_922_789_888_000.0;
+
+/// The energy's derivatives along one line as power series in t, from the moments
+/// `μ_j = Σ w_i β_iʲ` of the field's weights at `t = 0` (`β_i = b_i/h`; [`LineMoments`], summed
+/// from the blocks n(x) was computed from, so the whole line search adds one light pass over
+/// the samples and no exp). In units of h (a = 1), with `τ = t/h`:
+///
+/// With `θ_i(τ) = w_i exp(−2τβ_i) exp(−τ²)`, expanding `exp(−2τβ_i)` to order 15 and the
+/// polynomials in `B = β_i + τ` in powers of `β_i`,
+/// $$ e'(τ) = e^{−τ^2} \sum_{m \le 15} \frac{(−2τ)^m}{m!} \sum_{k \le 3} p_k μ_{m+k}, $$
+/// `p(β) = 2(β + τ) − 2(β + τ)³`, and e″ likewise with `q(β) = 2 − 10(β + τ)² + 4(β + τ)⁴`.
+/// The remainder of each sample's exponential is at most `x¹⁶ e^x / 16!`, `x = 2|τ||β_i|`,
+/// so the series is used where `(2|τ|)¹⁶ e^{2|τ| β_max} μ₁₆ P / 16!` (P bounding |p| and |q|
+/// with `|β| ≤ β_max`) is below [`SERIES_TOLERANCE`] `· μ₀`: on a line through a point near
+/// the surface, all but the first steps of the first line search (|t| up to about h/20).
+/// In the file's units `e′ = h e′_τ` and `e″ = e″_τ`, as [`energy_derivatives`] has them.
+struct LineSeries {
+    moments: LineMoments,
+    h: f64,
+}
+
+impl LineSeries {
+    /// `(e′(t), e″(t))` scaled by `exp(moments.log_scale)`, or `None` where the series'
+    /// remainder could exceed [`SERIES_TOLERANCE`].
+    fn at(&self, t: f64) -> Option<(f64, f64)> {
+        let LineMoments { mu, reach, .. } = &self.moments;
+        let tau = t / self.h;
+        let x = 2.0 * tau.abs();
+        let x_max = x * reach;
+        if !(x_max <= 1.0) {
+            return None;
+        }
+        let r = reach + tau.abs();
+        let bound_first = 2.0 * r + 2.0 * r * r * r;
+        let bound_second = 2.0 + 10.0 * r * r + 4.0 * r * r * r * r;
+        let remainder = x.powi(SERIES_ORDER as i32 + 1)
+            * INV_FACTORIAL_16
+            * x_max.exp()
+            * mu[SERIES_ORDER + 1]
+            * bound_first.max(bound_second);
+        if !(remainder <= SERIES_TOLERANCE * mu[0]) {
+            return None;
+        }
+        let (t2, t3, t4) = (tau * tau, tau * tau * tau, tau * tau * tau * tau);
+        let p = [2.0 * tau - 2.0 * t3, 2.0 - 6.0 * t2, -6.0 * tau, -2.0];
+        let q = [
+            2.0 - 10.0 * t2 + 4.0 * t4,
+            -20.0 * tau + 16.0 * t3,
+            -10.0 + 24.0 * t2,
+            16.0 * tau,
+            4.0,
+        ];
+        // c_m = (−2τ)^m / m!, summed from the highest order down so that the small terms
+        // are added first.
+        let mut c = [0.0; SERIES_ORDER + 1];
+        c[0] = 1.0;
+        for m in 1..=SERIES_ORDER {
+            c[m] = c[m - 1] * (-2.0 * tau) / m as f64;
+        }
+        let (mut first, mut second) = (0.0, 0.0);
+        for m in (0..=SERIES_ORDER).rev() {
+            let d1: f64 = (0..4).map(|k| p[k] * mu[m + k]).sum();
+            let d2: f64 = (0..5).map(|k| q[k] * mu[m + k]).sum();
+            first += c[m] * d1;
+            second += c[m] * d2;
+        }
+        let scale = (-t2).exp();
+        Some((first * scale * self.h, second * scale))
+    }
+}
+
+/// One line `x + t n` of the projection: its series near `t = 0`, and its samples, put in
+/// blocks the first time a `t` lies beyond the series.
+struct Line<'a> {
+    series: LineSeries,
+    x: &'a Point,
+    n: &'a Vector,
+    samples: &'a [Sample],
+    a: f64,
+    blocks: &'a mut Vec<LineBlock>,
+    /// The blocks' shift, once they are filled.
+    shift: Option<f64>,
+}
+
+impl Line<'_> {
+    /// `(e′(t), e″(t))`, from the series where it is exact to rounding, else from the samples;
+    /// each scaled by a positive constant (`exp` of the shift of the weights it used), which
+    /// the search, reading signs and the ratio `e′/e″` of one evaluation, does not see.
+    fn derivatives(&mut self, t: f64) -> (f64, f64) {
+        if let Some(d) = self.series.at(t) {
+            return d;
+        }
+        let shift = *self
+            .shift
+            .get_or_insert_with(|| LineBlock::fill(self.blocks, self.x, self.n, self.samples));
+        energy_derivatives(self.blocks, self.a, shift, t)
+    }
+}
+
 /// e′(t) and e″(t) along the line `x + t n`, by the same code as the projection's line
-/// search, both scaled by the positive constant `exp(a·shift)` (`shift` the smallest squared
-/// distance from `x` to a sample, returned as `a·shift`). For independent verification
-/// (`cargo xtask validate`): the projection itself calls the same [`energy_derivatives`].
+/// search (its series near `t = 0`, the samples' sums farther), both scaled by the positive
+/// constant `exp(log_scale)` (about `a δ²`, δ the distance from `x` to the nearest sample).
+/// For independent verification (`cargo xtask validate`).
 pub fn line_derivatives(
     x: &Point,
     n: &Vector,
@@ -56,14 +164,28 @@ pub fn line_derivatives(
     inv_h2: f64,
     t: f64,
 ) -> LineDerivatives {
-    let mut line = Vec::new();
-    LineBlock::fill(&mut line, x, n, samples);
-    let shift = line_shift(&line);
-    let (first, second) = energy_derivatives(&mut line, inv_h2, shift, t);
+    let mut scratch = FieldScratch::default();
+    scratch.load(x, samples, f64::INFINITY, inv_h2);
+    scratch.weigh_loaded();
+    let moments = scratch.line_moments(n);
+    let mut blocks = Vec::new();
+    let mut line = Line {
+        series: LineSeries {
+            moments,
+            h: inv_h2.sqrt().recip(),
+        },
+        x,
+        n,
+        samples,
+        a: inv_h2,
+        blocks: &mut blocks,
+        shift: None,
+    };
+    let (first, second) = line.derivatives(t);
     LineDerivatives {
         first,
         second,
-        log_scale: inv_h2 * shift,
+        log_scale: line.shift.map_or(moments.log_scale, |s| inv_h2 * s),
     }
 }
 
@@ -78,26 +200,32 @@ pub struct LineDerivatives {
     pub log_scale: f64,
 }
 
-/// The smallest squared distance from the line's origin to a sample: the weights are shifted
-/// by it so that they cannot all underflow.
-fn line_shift(line: &[LineBlock]) -> f64 {
-    line.iter().flat_map(|s| s.c).fold(f64::INFINITY, f64::min)
-}
-
 /// The most steps one downhill walk may take before its line search gives up.
 const MAX_WALK_STEPS: usize = 1000;
 
-/// The local minimum of `e(t)` reached by walking downhill from `t = 0`, or `None` when there
-/// is none within `max_travel`.
+/// The local minimum of `e(t)` along `x + t n` reached by walking downhill from `t = 0`, or
+/// `None` when there is none within `max_travel`. `moments` are those of `samples` along the
+/// line ([`FieldScratch::line_moments`]); `blocks` is storage for the samples' sums.
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn line_minimum(
-    line: &mut [LineBlock],
+    moments: LineMoments,
+    (x, n): (&Point, &Vector),
+    samples: &[Sample],
+    blocks: &mut Vec<LineBlock>,
     a: f64,
     h: f64,
     cfg: &ProjectionConfig,
 ) -> Option<f64> {
-    let shift = line_shift(line);
-    let toward: f64 = line.iter().flat_map(|s| s.b).map(|b| -b).sum();
-    walk_to_minimum(|t| energy_derivatives(line, a, shift, t), toward, h, cfg)
+    let mut line = Line {
+        series: LineSeries { moments, h },
+        x,
+        n,
+        samples,
+        a,
+        blocks,
+        shift: None,
+    };
+    walk_to_minimum(|t| line.derivatives(t), moments.toward, h, cfg)
 }
 
 /// The search of [`line_minimum`] on any `f(t) = (e′(t), e″(t))`: downhill from `t = 0` (at
@@ -198,6 +326,82 @@ fn walk_to_minimum(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A patch of a sphere of radius 1 around +z, `n` samples at a spacing of about `s`,
+    /// jittered, with their normals.
+    fn sphere_patch(n: usize, s: f64) -> Vec<Sample> {
+        let side = (n as f64).sqrt().ceil() as usize;
+        (0..n)
+            .map(|i| {
+                let (u, v) = ((i % side) as f64, (i / side) as f64);
+                let c = (side as f64 - 1.0) / 2.0;
+                // A fixed irrational jitter, so that no two samples line up.
+                let j = |k: f64| 0.3 * ((k * 0.754_877_666).fract() - 0.5);
+                let dir = Vector::new(
+                    (u - c + j(i as f64)) * s,
+                    (v - c + j(i as f64 + 0.5)) * s,
+                    1.0,
+                )
+                .normalize();
+                Sample {
+                    point: Point::from(dir),
+                    normal: dir,
+                }
+            })
+            .collect()
+    }
+
+    /// The series agrees with the samples' sums wherever it answers, answers over the range
+    /// of t a converging projection walks, and declines far out.
+    #[test]
+    fn the_line_series_matches_the_direct_sums_where_it_answers() {
+        let s = 0.01;
+        let samples = sphere_patch(900, s);
+        let h = 2.0 * s;
+        let a = 1.0 / (h * h);
+        for (x, n) in [
+            (Point::new(0.0, 0.0, 1.0), Vector::z()),
+            (
+                Point::new(0.003, -0.002, 1.004),
+                Vector::new(0.2, 0.1, 1.0).normalize(),
+            ),
+            (
+                Point::new(0.01, 0.0, 0.99),
+                Vector::new(0.0, -0.3, 1.0).normalize(),
+            ),
+        ] {
+            let mut line = Vec::new();
+            let shift = LineBlock::fill(&mut line, &x, &n, &samples);
+            let mut scratch = FieldScratch::default();
+            scratch.load(&x, &samples, f64::INFINITY, a);
+            scratch.weigh_loaded();
+            let series = LineSeries {
+                moments: scratch.line_moments(&n),
+                h,
+            };
+            let mut answered = 0;
+            for e in -12..=0 {
+                for sign in [-1.0, 1.0] {
+                    let t = sign * h * 0.05 * 10f64.powi(e);
+                    let direct = energy_derivatives(&mut line, a, shift, t);
+                    let Some(by_series) = series.at(t) else {
+                        continue;
+                    };
+                    answered += 1;
+                    // The sums' terms are of the order of h Σw and 2Σw.
+                    let sum = series.moments.mu[0];
+                    assert!(
+                        (by_series.0 - direct.0).abs() < 1e-13 * h * sum
+                            && (by_series.1 - direct.1).abs() < 1e-13 * sum,
+                        "t = {t:e}: series {by_series:?}, direct {direct:?}"
+                    );
+                }
+            }
+            // Every |t| up to h/200 is answered (26 values of t, less those beyond).
+            assert!(answered >= 22, "{answered} answered");
+            assert!(series.at(0.5 * h).is_none());
+        }
+    }
 
     /// [`walk_to_minimum`] on `f`, with the number of evaluations it made.
     fn walk(f: impl Fn(f64) -> (f64, f64), toward: f64, h: f64) -> (Option<f64>, usize) {

@@ -15,7 +15,7 @@ mod line;
 
 pub use exp::{exp_any, exp_weight};
 pub(crate) use field::{Block, coefficients, lane_moments, load_blocks, weigh, weights};
-pub(crate) use line::{LineBlock, line_energy};
+pub(crate) use line::{LINE_MOMENTS, LineBlock, LineMoments, line_energy, line_moments};
 
 use crate::field::Sample;
 use crate::jet::{JetConfig, JetFit, JetScratch, jet_fit};
@@ -108,6 +108,14 @@ kernels! {
     fn lane_moments(blocks: &[Block], k: usize, acc: &mut [Lanes; 10]);
     /// [`line_energy`].
     fn line_energy(line: &mut [LineBlock], a: f64, shift: f64, t: f64, acc: &mut [Lanes; 2]);
+    /// [`line_moments`].
+    fn line_moments(
+        blocks: &[Block],
+        n: &Vector,
+        mu: &mut [Lanes; LINE_MOMENTS],
+        reach: &mut Lanes,
+        toward: &mut Lanes
+    );
     /// [`crate::jet::fit`], whole: its moments and residuals are per-sample loops, and its
     /// 15 × 15 algebra runs along rows, which vectorise.
     #[allow(clippy::too_many_arguments)]

@@ -411,9 +411,17 @@ impl Evaluator<'_> {
             self.scratch
                 .load(&local, &self.candidates, f64::INFINITY, a);
             let n = self.scratch.loaded_normal()?;
-            LineBlock::fill(&mut self.line, &local, &n, &self.candidates);
-            let t =
-                line_minimum(&mut self.line, a, h, &cfg).ok_or(PointStatus::ProjectionFailed)?;
+            let moments = self.scratch.line_moments(&n);
+            let t = line_minimum(
+                moments,
+                (&local, &n),
+                &self.candidates,
+                &mut self.line,
+                a,
+                h,
+                &cfg,
+            )
+            .ok_or(PointStatus::ProjectionFailed)?;
             local += n * t;
             // Below the position's own rounding (8 ulps) no step can be resolved, whatever
             // `tolerance · h` asks for.
