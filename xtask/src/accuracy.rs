@@ -710,6 +710,7 @@ the default.
   The noisy torus with estimated normals has k1 σ 0.042 and 0.41 (the targets were measured with
   exact normals). The jet's curvature stage runs at 103 k points/s on the 1M sphere with file
   normals on this 2-core Xeon (71 k before this study's speed work): 2.4× short of 250 k. The
-  paper's method runs at 202 k on this Xeon (docs/benchmarks.md) and met the target at 366 k
-  on the AMD EPYC of an earlier run (2026-12-04), a machine about 1.9× faster per CPU-second.
+  paper's method runs at 182–202 k on this Xeon (two runs of `cargo xtask bench`) and
+  met the target at 366 k on the AMD EPYC of an earlier run (2026-12-04), a machine about 1.9×
+  faster per CPU-second.
 ";
