@@ -139,6 +139,20 @@ const FAULTS: &[Fault] = &[
         replacement: "2.0 * theta[l] * bb[l] * (1.0 - 3.0 * ab2[l])",
     },
     Fault {
+        name: "P4 series' e″ β² term by (1 + 1e-9)",
+        description: "near threshold: in the series near t = 0, q₂ = −10 + 24τ² with 10(1 + 1e-9)",
+        file: "crates/mls-core/src/projection.rs",
+        original: "-10.0 + 24.0 * t2,",
+        replacement: "-10.0 * (1.0 + 1e-9) + 24.0 * t2,",
+    },
+    Fault {
+        name: "P5 series' moments along the wrong axis",
+        description: "β = d·n with n's y and z swapped in the moments of the series",
+        file: "crates/mls-core/src/kernels/line.rs",
+        original: "x[l] * n.x + y[l] * n.y + z[l] * n.z",
+        replacement: "x[l] * n.x + y[l] * n.z + z[l] * n.y",
+    },
+    Fault {
         name: "SH1 shrinkage δ by (1 + 1e-9)",
         description: "near threshold: δ = (k1 + k2)h²/4 · (1 + 1e-9) in the shrinkage correction",
         file: "crates/mls-core/src/adaptive.rs",
