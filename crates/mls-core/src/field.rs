@@ -86,6 +86,8 @@ pub struct FieldScratch {
     shift: f64,
     /// Blocks whose weights [`Self::loaded_normal`] computed, for [`Self::line_moments`].
     weighed: usize,
+    /// Samples in the blocks since the last [`Self::load`], for [`Self::reload_moved`].
+    count: usize,
 }
 
 impl FieldScratch {
@@ -106,7 +108,21 @@ impl FieldScratch {
         self.inv_h2 = inv_h2;
         self.shift = shift;
         self.weighed = 0;
+        self.count = len;
         len
+    }
+
+    /// The samples last loaded, loaded again as seen from the point moved by `delta` (file
+    /// units), without reading them: what [`Self::load`] of the same samples with an infinite
+    /// radius at the moved point gives, up to the rounding of the offsets' update.
+    pub(crate) fn reload_moved(&mut self, delta: &Vector) -> usize {
+        let delta = delta * self.inv_h2.sqrt();
+        let count = self.count;
+        let blocks = &mut self.blocks[..];
+        self.shift = dispatch!(k => k.offset_blocks(blocks, &delta, count));
+        self.len = count;
+        self.weighed = 0;
+        count
     }
 }
 
@@ -339,6 +355,43 @@ impl Sym {
     }
 }
 
+/// The projection's reload from a moved point sees what a fresh load there sees.
+#[cfg(test)]
+mod reload_tests {
+    use super::*;
+
+    #[test]
+    fn reloading_from_a_moved_point_matches_loading_there() {
+        let samples: Vec<Sample> = (0..37)
+            .map(|i| {
+                let (u, v) = (f64::from(i % 7) * 0.1 - 0.3, f64::from(i / 7) * 0.1 - 0.25);
+                Sample {
+                    point: Point::new(u, v, 0.2 * u * v),
+                    normal: Vector::new(-0.2 * v, -0.2 * u, 1.0).normalize(),
+                }
+            })
+            .collect();
+        let (x, delta, inv_h2) = (
+            Point::new(0.01, 0.02, 0.05),
+            Vector::new(0.0, 0.01, -0.04),
+            25.0,
+        );
+        let mut fresh = FieldScratch::default();
+        fresh.load(&(x + delta), &samples, f64::INFINITY, inv_h2);
+        let mut moved = FieldScratch::default();
+        moved.load(&x, &samples, f64::INFINITY, inv_h2);
+        moved.loaded_normal().unwrap();
+        assert_eq!(moved.reload_moved(&delta), samples.len());
+        assert!((moved.shift - fresh.shift).abs() < 1e-15);
+        let n = fresh.loaded_normal().unwrap();
+        let m = moved.loaded_normal().unwrap();
+        assert!((n - m).norm() < 1e-15, "{n} against {m}");
+        // The unused lanes of the last block stay weightless.
+        let last = &moved.blocks[samples.len() / LANES];
+        assert!(last.w[samples.len() % LANES..].iter().all(|&w| w == 0.0));
+    }
+}
+
 /// Every [`Kernels`] implementation this CPU can run gives the same bits: the lane count is
 /// fixed and no path fuses operations.
 #[cfg(all(test, target_arch = "x86_64"))]
@@ -440,6 +493,20 @@ mod isa_tests {
                 assert!(p[0].iter().all(|v| v.is_finite() && *v != 0.0));
                 assert_eq!(p, q);
             }
+
+            // The projection's reload from a moved point.
+            let moved = |kernels: &dyn Fn(&mut [Block], usize) -> f64| {
+                let mut scratch = FieldScratch::default();
+                scratch.load(&x, &samples[..599], f64::INFINITY, 100.0);
+                let shift = kernels(&mut scratch.blocks, scratch.count);
+                let blocks = &scratch.blocks[..599usize.div_ceil(LANES)];
+                (shift, blocks.iter().map(|b| (b.d, b.w)).collect::<Vec<_>>())
+            };
+            let delta = Vector::new(0.01, -0.02, 0.03);
+            assert_eq!(
+                moved(&|b, len| Portable.offset_blocks(b, &delta, len)),
+                moved(&|b, len| avx2.offset_blocks(b, &delta, len))
+            );
 
             // The moments of the projection's series along that line, from the weighed blocks.
             let by_portable = line_moments_with(Portable, &x, &samples[..599], &n);

@@ -71,6 +71,41 @@ pub(crate) fn load_blocks(
     (len, shift)
 }
 
+/// The blocks of `len` loaded samples seen from a point moved by `delta` (in units of h):
+/// `d + delta`, and `|d|²` in place of the weights, the unused lanes after the last sample
+/// kept at zero offset and infinite length as [`load_blocks`] leaves them. Returns the shift,
+/// the smallest `|d|²`. Cheaper than loading again: the samples are not read.
+#[inline(always)]
+pub(crate) fn offset_blocks(blocks: &mut [Block], delta: &Vector, len: usize) -> f64 {
+    let end = len.div_ceil(LANES);
+    let mut nearest = [f64::INFINITY; LANES];
+    for block in &mut blocks[..end] {
+        let [x, y, z] = block.d;
+        let d = [
+            per_lane(|l| x[l] + delta.x),
+            per_lane(|l| y[l] + delta.y),
+            per_lane(|l| z[l] + delta.z),
+        ];
+        block.d = d;
+        block.w = per_lane(|l| d[0][l] * d[0][l] + d[1][l] * d[1][l] + d[2][l] * d[2][l]);
+        nearest = per_lane(|l| {
+            if block.w[l] < nearest[l] {
+                block.w[l]
+            } else {
+                nearest[l]
+            }
+        });
+    }
+    for slot in len..end * LANES {
+        let (block, lane) = (&mut blocks[slot / LANES], slot % LANES);
+        for k in 0..3 {
+            block.d[k][lane] = 0.0;
+        }
+        block.w[lane] = f64::INFINITY;
+    }
+    nearest.into_iter().fold(f64::INFINITY, f64::min)
+}
+
 /// The shifted weights `exp(−(|d|² − shift))` in place of the squared lengths, and the
 /// `d dᵀ` products both passes use. The first pass's coefficients `w v` go to `coef`.
 /// Returns `Σ w`.

@@ -14,7 +14,9 @@ mod field;
 mod line;
 
 pub use exp::{exp_any, exp_weight};
-pub(crate) use field::{Block, coefficients, lane_moments, load_blocks, weigh, weights};
+pub(crate) use field::{
+    Block, coefficients, lane_moments, load_blocks, offset_blocks, weigh, weights,
+};
 pub(crate) use line::{LINE_MOMENTS, LineBlock, LineMoments, line_energy, line_moments};
 
 use crate::field::Sample;
@@ -98,6 +100,8 @@ kernels! {
         radius2: f64,
         inv_h2: f64
     ) -> (usize, f64);
+    /// [`offset_blocks`].
+    fn offset_blocks(blocks: &mut [Block], delta: &Vector, len: usize) -> f64;
     /// [`weigh`].
     fn weigh(blocks: &mut [Block], shift: f64) -> f64;
     /// [`weights`].

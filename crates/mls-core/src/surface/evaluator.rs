@@ -385,10 +385,13 @@ impl Evaluator<'_> {
         // origin, where a weight is below exp(−42) ≈ 6e-19 of a sample's at the origin.
         let margin = PROJECTION_REUSE_MARGIN * h;
         let mut gathered_at: Option<Point> = None;
+        // Where the scratch last loaded the candidates (all of them), while they stay the same.
+        let mut loaded_at: Option<Point> = None;
         for _ in 0..cfg.max_iterations {
             if gathered_at.is_none_or(|c| (local - c).norm() > margin) {
                 self.gather_candidates(&local, radius.map(|r| r + margin));
                 gathered_at = Some(local);
+                loaded_at = None;
             }
             // The neighbours within the radius, as a query of its own would count them; the
             // count stops at the fewest accepted (in a dense support, after a few samples).
@@ -408,8 +411,14 @@ impl Evaluator<'_> {
                     PointStatus::TooFewNeighbours
                 });
             }
-            self.scratch
-                .load(&local, &self.candidates, f64::INFINITY, a);
+            // The same candidates seen from the moved point: their offsets moved by the step.
+            match loaded_at {
+                Some(at) => self.scratch.reload_moved(&(local - at)),
+                None => self
+                    .scratch
+                    .load(&local, &self.candidates, f64::INFINITY, a),
+            };
+            loaded_at = Some(local);
             let n = self.scratch.loaded_normal()?;
             let moments = self.scratch.line_moments(&n);
             let t = line_minimum(
