@@ -206,7 +206,6 @@ const MAX_WALK_STEPS: usize = 1000;
 /// The local minimum of `e(t)` along `x + t n` reached by walking downhill from `t = 0`, or
 /// `None` when there is none within `max_travel`. `moments` are those of `samples` along the
 /// line ([`FieldScratch::line_moments`]); `blocks` is storage for the samples' sums.
-#[allow(clippy::too_many_arguments)]
 pub(crate) fn line_minimum(
     moments: LineMoments,
     (x, n): (&Point, &Vector),
