@@ -49,6 +49,18 @@ fn patch(
         .unzip()
 }
 
+/// The witness's samples: each point with its normal.
+fn samples_of(points: &[Point], normals: &[Vector]) -> Vec<Sample> {
+    points
+        .iter()
+        .zip(normals)
+        .map(|(p, v)| Sample {
+            point: *p,
+            normal: *v,
+        })
+        .collect()
+}
+
 /// Relative thresholds: those of `cargo xtask validate` (k through one solve; the predicted
 /// error through M⁻¹ twice and the residuals), both scaled by the fit's conditioning.
 const K_THRESHOLD: f64 = 1e-10;
@@ -81,14 +93,7 @@ fn jet_matches_its_witness_with_and_without_slopes() {
         let (points, normals) = patch(&mut rng, n, shape);
         let h = factor / (n as f64).sqrt();
         let surface = MlsSurface::new(&points, &normals, MlsConfig::new(h)).unwrap();
-        let samples: Vec<Sample> = points
-            .iter()
-            .zip(&normals)
-            .map(|(p, v)| Sample {
-                point: *p,
-                normal: *v,
-            })
-            .collect();
+        let samples = samples_of(&points, &normals);
         // Queries near the middle (every scale's support inside the patch), on and off the
         // samples.
         let queries: Vec<Point> = (0..12)
@@ -175,14 +180,7 @@ fn a_first_support_without_slopes_hands_no_noise_ratio_on() {
         }
     }
     let surface = MlsSurface::new(&points, &normals, MlsConfig::new(h)).unwrap();
-    let samples: Vec<Sample> = points
-        .iter()
-        .zip(&normals)
-        .map(|(p, v)| Sample {
-            point: *p,
-            normal: *v,
-        })
-        .collect();
+    let samples = samples_of(&points, &normals);
     let queries: Vec<Point> = (0..16)
         .map(|_| {
             let (x, y) = (

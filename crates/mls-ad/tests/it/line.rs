@@ -11,34 +11,46 @@ use rand_chacha::ChaCha8Rng;
 
 use super::{cloud, rel};
 
+/// A random line: 60 samples on a patch of the unit sphere, h, and a point within `±offset·h`
+/// of it with a direction within about 0.3 rad of the patch's normal.
+fn random_line(rng: &mut ChaCha8Rng, offset: f64) -> (Vec<mls_core::Sample>, f64, Point, Vector) {
+    let samples = cloud(rng, 60);
+    let h = rng.random_range(0.05..0.3);
+    let x = Point::new(
+        rng.random_range(-0.1..0.1),
+        rng.random_range(-0.1..0.1),
+        1.0 + rng.random_range(-offset..offset) * h,
+    );
+    let n = Vector::new(
+        rng.random_range(-0.3..0.3),
+        rng.random_range(-0.3..0.3),
+        1.0,
+    )
+    .normalize();
+    (samples, h, x, n)
+}
+
+/// The relative differences of e′(t) and e″(t) between the line code and the witness.
+fn differences(x: &Point, n: &Vector, samples: &[mls_core::Sample], h: f64, t: f64) -> [f64; 2] {
+    let a = 1.0 / (h * h);
+    let p = line_derivatives(x, n, samples, a, t);
+    let w = mls_ad::line_witness(&x.coords, n, samples, a, t);
+    let rescale = (w.log_scale - p.log_scale).exp();
+    [
+        rel(p.first * rescale, w.first, w.first_scale),
+        rel(p.second * rescale, w.second, w.second_scale),
+    ]
+}
+
 #[test]
 fn line_derivatives_away_from_the_origin_match_the_witness() {
     let mut rng = ChaCha8Rng::seed_from_u64(0x5eed_0111);
     let mut worst = [0.0f64; 2];
     for case in 0..40 {
-        let samples = cloud(&mut rng, 60);
-        let h = rng.random_range(0.05..0.3);
-        let a = 1.0 / (h * h);
-        let x = Point::new(
-            rng.random_range(-0.1..0.1),
-            rng.random_range(-0.1..0.1),
-            1.0 + rng.random_range(-0.5..0.5) * h,
-        );
-        let n = Vector::new(
-            rng.random_range(-0.3..0.3),
-            rng.random_range(-0.3..0.3),
-            1.0,
-        )
-        .normalize();
+        let (samples, h, x, n) = random_line(&mut rng, 0.5);
         // |t| from h/4 to h, either side: the t and t² terms of the squared distance matter.
         let t = rng.random_range(0.25..1.0) * h * if case % 2 == 0 { 1.0 } else { -1.0 };
-        let p = line_derivatives(&x, &n, &samples, a, t);
-        let w = mls_ad::line_witness(&x.coords, &n, &samples, a, t);
-        let rescale = (w.log_scale - p.log_scale).exp();
-        let errs = [
-            rel(p.first * rescale, w.first, w.first_scale),
-            rel(p.second * rescale, w.second, w.second_scale),
-        ];
+        let errs = differences(&x, &n, &samples, h, t);
         for (k, e) in errs.iter().enumerate() {
             worst[k] = worst[k].max(*e);
             assert!(
@@ -58,33 +70,11 @@ fn line_derivatives_away_from_the_origin_match_the_witness() {
 fn line_derivatives_near_the_origin_match_the_witness() {
     let mut rng = ChaCha8Rng::seed_from_u64(0x5eed_0113);
     for case in 0..40 {
-        let samples = cloud(&mut rng, 60);
-        let h = rng.random_range(0.05..0.3);
-        let a = 1.0 / (h * h);
-        let x = Point::new(
-            rng.random_range(-0.1..0.1),
-            rng.random_range(-0.1..0.1),
-            1.0 + rng.random_range(-0.1..0.1) * h,
-        );
-        let n = Vector::new(
-            rng.random_range(-0.3..0.3),
-            rng.random_range(-0.3..0.3),
-            1.0,
-        )
-        .normalize();
+        let (samples, h, x, n) = random_line(&mut rng, 0.1);
         // |t| from 1e-10 h to h/10, log-uniform, either side.
         let t =
             10f64.powf(rng.random_range(-10.0..-1.0)) * h * if case % 2 == 0 { 1.0 } else { -1.0 };
-        let p = line_derivatives(&x, &n, &samples, a, t);
-        let w = mls_ad::line_witness(&x.coords, &n, &samples, a, t);
-        let rescale = (w.log_scale - p.log_scale).exp();
-        for (k, e) in [
-            rel(p.first * rescale, w.first, w.first_scale),
-            rel(p.second * rescale, w.second, w.second_scale),
-        ]
-        .into_iter()
-        .enumerate()
-        {
+        for (k, e) in differences(&x, &n, &samples, h, t).into_iter().enumerate() {
             assert!(
                 e < 1e-12,
                 "case {case}: line derivative {} differs by {e:e} (t = {t:e}, h = {h})",
