@@ -435,8 +435,15 @@ pub(crate) fn _tile_curvature<'py>(
     let TileResult {
         columns: out,
         source,
+        agreement,
         ..
     } = result;
+    // Judged per tile: each Dask task sees only its own.
+    let warnings: Vec<String> = agreement
+        .and_then(|a| pipeline::file_normals_warning(a, name))
+        .into_iter()
+        .collect();
+    crate::warn(py, &warnings)?;
     let queries: Vec<[f64; 3]> = points
         .iter()
         .zip(&core)
@@ -453,7 +460,7 @@ pub(crate) fn _tile_curvature<'py>(
         },
         normals_source: source,
         timings,
-        warnings: Vec::new(),
+        warnings,
     };
     Ok(Table::new("curvature", columns, arrays, summary))
 }

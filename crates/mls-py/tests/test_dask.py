@@ -169,6 +169,29 @@ def test_estimated_normals_are_close(client, cloud):
     assert close.mean() >= 0.99, close.mean()
 
 
+def test_inconsistent_file_normals_are_warned_about(cloud):
+    """Each tile judges the file normals' signs as the single call does: 4 % flipped is
+    warned about (run in this process, where the warning can be caught), consistent ones are
+    not."""
+    points, normals = cloud
+    flipped = normals.copy()
+    flipped[::25] *= -1
+    for given, warned in [(flipped, True), (normals, False)]:
+        lazy = mlscurv.dask.curvature(
+            da.from_array(points, chunks=CHUNK),
+            da.from_array(given, chunks=(CHUNK, 3)),
+            h=H,
+            method="paper",
+            memory=SMALL,
+        )
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            dask.compute(lazy["k1"], scheduler="sync")
+        said = [str(w.message) for w in caught if "not consistently oriented" in str(w.message)]
+        assert bool(said) == warned, said
+        assert all("(tile " in w for w in said), said
+
+
 def message(call) -> str:
     with pytest.raises(ValueError) as e:
         call()

@@ -24,7 +24,10 @@ pub use self::input::{
     STDIN_NAME, STDOUT_NAME, check_count, format_name, input_name, read, read_any, read_outcome,
     read_quietly, to_points,
 };
-pub use self::oriented::{Normals, check_file_normals, normals, scan_viewpoints};
+pub use self::oriented::{
+    Normals, check_file_normals, file_normals_agreement, file_normals_warning, normals,
+    scan_viewpoints,
+};
 pub use self::scale::{Scale, check_scale, choose_h_on, print_warning};
 pub use crate::output::{Carried, Output, check_output, write_stdout};
 

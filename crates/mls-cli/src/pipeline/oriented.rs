@@ -40,13 +40,26 @@ pub fn check_file_normals(
     normals: impl Fn(usize) -> Option<Vector> + Sync,
     file: &str,
 ) -> Option<String> {
-    let agree = sampled_consistency(
+    file_normals_warning(file_normals_agreement(cloud, normals)?, file)
+}
+
+/// The share of sampled neighbour pairs whose file `normals` agree in sign, as
+/// [`check_file_normals`] measures it (`None` when no pair has two normals).
+pub fn file_normals_agreement(
+    cloud: &IndexedCloud<'_>,
+    normals: impl Fn(usize) -> Option<Vector> + Sync,
+) -> Option<f64> {
+    sampled_consistency(
         cloud,
         DEFAULT_NEIGHBOURS,
         CONSISTENCY_SAMPLE,
         Parallelism::Rayon,
         normals,
-    )?;
+    )
+}
+
+/// [`check_file_normals`]'s warning for a measured agreement `agree`, if it is too low.
+pub fn file_normals_warning(agree: f64, file: &str) -> Option<String> {
     (agree < MIN_FILE_CONSISTENCY).then(|| {
         format!(
             "{file}: the file's normals are not consistently oriented: only {:.1}% of \

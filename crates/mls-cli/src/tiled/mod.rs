@@ -269,9 +269,11 @@ pub fn curvature(run: &TiledRun<'_>, t: &mut Timings) -> Result<TiledSummary> {
     let mut normals_source = String::new();
     let bar = crate::progress::Bar::new(n as usize, "curvature", t.show());
     let mut done = 0usize;
+    // The file normals' agreement, summed over tiles weighted by their own points.
+    let mut agreement = (0.0, 0u64);
     t.measure("curvature", || -> Result<()> {
         for tile in 0..tiles {
-            let source = evaluate_tile(
+            let (source, agree) = evaluate_tile(
                 &work,
                 tile,
                 &plan,
@@ -288,12 +290,23 @@ pub fn curvature(run: &TiledRun<'_>, t: &mut Timings) -> Result<TiledSummary> {
             if normals_source.is_empty() {
                 normals_source = source;
             }
-            done += plan.tiles()[tile].points as usize;
+            let own = plan.tiles()[tile].points;
+            if let Some(a) = agree {
+                agreement.0 += a * own as f64;
+                agreement.1 += own;
+            }
+            done += own as usize;
             bar.set(done);
         }
         Ok(())
     })?;
     drop(bar);
+    if agreement.1 > 0 {
+        let agree = agreement.0 / agreement.1 as f64;
+        if let Some(w) = pipeline::file_normals_warning(agree, &name) {
+            pipeline::print_warning(w);
+        }
+    }
 
     // 5. The output, in input order.
     let mut summary = TiledSummary {

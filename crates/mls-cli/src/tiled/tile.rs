@@ -39,6 +39,9 @@ pub struct TileResult {
     pub codes: Vec<u8>,
     /// Where the normals came from, for the summary.
     pub source: String,
+    /// With the file's normals, the share of sampled neighbour pairs over the tile whose
+    /// normals agree in sign ([`pipeline::file_normals_agreement`]).
+    pub agreement: Option<f64>,
 }
 
 /// The curvature at the tile's own points (`core`) of the surface of all its `points` (its
@@ -89,15 +92,18 @@ pub fn tile_curvature(
         .zip(core)
         .filter_map(|(p, &c)| c.then_some(*p))
         .collect();
-    let surface = pipeline::surface_in(
-        points,
-        normals.normals,
-        h,
-        s.cutoff,
-        frame,
-        name,
-        evaluate::curvature_surface(false),
-    )?;
+    let build = evaluate::curvature_surface(false);
+    let (surface, agreement) = if from_file {
+        // One index, in the whole cloud's frame, for the check and the surface.
+        let cloud = pipeline::index(points, frame, name)?;
+        let agreement = pipeline::file_normals_agreement(&cloud, |i| normals.normals[i]);
+        let surface = pipeline::surface(cloud, points, normals.normals, h, s.cutoff, name, build)?;
+        (surface, agreement)
+    } else {
+        let surface =
+            pipeline::surface_in(points, normals.normals, h, s.cutoff, frame, name, build)?;
+        (surface, None)
+    };
     let default_jet = evaluate::jet_config(from_file);
     let columns = evaluate::curvature(
         &queries,
@@ -110,12 +116,14 @@ pub fn tile_curvature(
         columns,
         codes,
         source: normals.source,
+        agreement,
     })
 }
 
 /// Evaluates one tile: reads its points, gets their normals, builds the surface in the
 /// whole cloud's frame, evaluates its own points and writes their results; returns the
-/// normals' description.
+/// normals' description and, with the file's normals, their agreement over the tile
+/// ([`TileResult::agreement`]).
 #[allow(clippy::too_many_arguments)]
 pub(super) fn evaluate_tile(
     work: &Workspace,
@@ -130,7 +138,7 @@ pub(super) fn evaluate_tile(
     options: &CurvatureOptions,
     jet: Option<&mls_core::JetConfig>,
     name: &str,
-) -> Result<String> {
+) -> Result<(String, Option<f64>)> {
     let path = work.path(&format!("tile{tile}.pts"));
     let mut bytes = Vec::new();
     File::open(&path)
@@ -155,6 +163,7 @@ pub(super) fn evaluate_tile(
         columns: out,
         codes,
         mut source,
+        agreement,
     } = tile_curvature(
         &points,
         file_normals,
@@ -218,7 +227,7 @@ pub(super) fn evaluate_tile(
             .collect();
         std::fs::write(&path, halo).with_context(|| path.display().to_string())?;
     }
-    Ok(source)
+    Ok((source, agreement))
 }
 
 /// Reads the input again and writes each point with its tile's next result.

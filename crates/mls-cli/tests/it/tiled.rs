@@ -16,6 +16,11 @@ const SMALL_BUDGET: &str = "66MiB";
 /// Rolling terrain, `n` points uniformly at random over `side` × `side` metres far from the
 /// origin, with exact normals and an intensity, written as LAS by mls-io.
 fn write_terrain(path: &Path, n: usize, side: f64, seed: u64) {
+    write_terrain_flipped(path, n, side, seed, usize::MAX);
+}
+
+/// [`write_terrain`] with every `flip`-th normal pointing down.
+fn write_terrain_flipped(path: &Path, n: usize, side: f64, seed: u64, flip: usize) {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let (mut points, mut normals, mut intensity) = (Vec::new(), Vec::new(), Vec::new());
     for _ in 0..n {
@@ -27,7 +32,12 @@ fn write_terrain(path: &Path, n: usize, side: f64, seed: u64) {
         );
         let norm = (fx * fx + fy * fy + 1.0).sqrt();
         points.push([x + 420_000.0, y + 5_100_000.0, z + 300.0]);
-        normals.push([-fx / norm, -fy / norm, 1.0 / norm]);
+        let sign = if normals.len() % flip == flip - 1 {
+            -1.0
+        } else {
+            1.0
+        };
+        normals.push([-fx / norm, -fy / norm, 1.0 / norm].map(|c| sign * c));
         intensity.push(rng.random_range(0..4096u16));
     }
     let intensity = Attribute {
@@ -101,6 +111,46 @@ fn tiled_runs_equal_the_in_memory_run_bitwise() {
         .filter(|n| n.to_string_lossy().starts_with('.'))
         .collect();
     assert!(left.is_empty(), "temporary files left: {left:?}");
+}
+
+/// Flipped file normals are warned about in a tiled run as in memory, with the share of
+/// agreeing neighbour pairs measured over the tiles; consistent ones are not.
+#[test]
+fn a_tiled_run_warns_about_inconsistent_file_normals() {
+    const WARNING: &str = "the file's normals are not consistently oriented";
+    let dir = tempfile::tempdir().unwrap();
+    let (good, bad) = (dir.path().join("good.las"), dir.path().join("bad.las"));
+    write_terrain(&good, 30_000, 90.0, 12);
+    // 4 % of the normals flipped, isolated: 2 f (1 − f) = 7.7 % of neighbour pairs disagree.
+    write_terrain_flipped(&bad, 30_000, 90.0, 12, 25);
+    let out = dir.path().join("out.las");
+    let tiled = ["--method", "paper", "--h", "1.1", "--memory", SMALL_BUDGET];
+    let r = curvature(&good, &out, &tiled);
+    assert!(tiles(&r.stderr) >= 4, "{}", r.stderr);
+    assert!(!r.stderr.contains(WARNING), "{}", r.stderr);
+    let r = curvature(&bad, &out, &tiled);
+    assert!(tiles(&r.stderr) >= 4, "{}", r.stderr);
+    let warning = r
+        .stderr
+        .lines()
+        .find(|l| l.contains(WARNING))
+        .unwrap_or_else(|| panic!("no warning in\n{}", r.stderr));
+    assert!(warning.contains("bad.las"), "{warning}");
+    let agree: f64 = warning
+        .split("only ")
+        .nth(1)
+        .unwrap()
+        .split('%')
+        .next()
+        .unwrap()
+        .parse()
+        .unwrap();
+    let expected = 100.0 * (1.0 - 2.0 * 0.04 * 0.96);
+    assert!(
+        (agree - expected).abs() < 1.0,
+        "{agree}% against {expected}%"
+    );
+    assert!(out.exists());
 }
 
 /// Issue 14's check at its size: 2M points in at least 16 tiles (the paper's surface, whose
