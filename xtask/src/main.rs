@@ -65,8 +65,8 @@ enum Task {
     /// Every estimator on random, jittered, grid, scanline and noisy clouds against the
     /// analytic truth; writes docs/accuracy.md.
     Accuracy {
-        /// Random seeds per cloud.
-        #[arg(long, default_value_t = 2)]
+        /// Random seeds per cloud (about 25 s each on 2 cores).
+        #[arg(long, default_value_t = 5)]
         seeds: u64,
     },
     /// The same clouds with several jet settings, printed (for studies); with JET_DIAG=1 also
