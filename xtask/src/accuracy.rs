@@ -705,7 +705,7 @@ the default.
 - **Calibration:** within a factor 2 in every decile on the random and noisy clouds except the
   top decile of the 10k random torus with file normals, which over-predicts by 2.08× (five
   seeds, as with two): there the predicted error is mostly the bias term (1.6e-4 of 1.9e-4,
-  `JET_DIAG=1 cargo xtask accuracy-explore "random 10k"`), carried down from the step between
+  `JET_DIAG=1 cargo xtask accuracy-explore \"random 10k\"`), carried down from the step between
   the 1.5h and 2.1h fits by the ρ⁴ law, against an observed RMS error of 9.2e-5.
 - **Not met:** the random ellipsoid's k2 with estimated normals is 0.52× the reference's (target
   ≤ 0.5×; 0.55× with two seeds). Estimated normals are 1.6–6.1× (k1) and 2.2–5.3× (k2) less
