@@ -393,7 +393,8 @@ mod tests {
                     let t = sign * h * f;
                     let direct = energy_derivatives(&mut line, a, shift, t);
                     let Some(by_series) = series.at(t) else {
-                        // Its remainder is below rounding well beyond the walk's last steps.
+                        // It declines where 2|τ|·reach > 1 or its remainder bound exceeds
+                        // rounding: beyond h/8 on these lines.
                         assert!(f > 0.1, "t = {t:e} not answered");
                         continue;
                     };
