@@ -267,3 +267,12 @@ pub fn outward_fraction(points: &[[f64; 3]], normals: &[Vector3<f64>]) -> f64 {
         .count();
     out as f64 / points.len() as f64
 }
+
+/// The share of neighbour pairs that agree, as the warning prints it ("only 92.3% of").
+pub fn printed_agreement(stderr: &str) -> f64 {
+    let after = stderr
+        .split("only ")
+        .nth(1)
+        .expect("no share in the warning");
+    after.split('%').next().unwrap().parse().unwrap()
+}

@@ -1,18 +1,9 @@
 //! Normals read from a file are used as they are; when their signs are not consistent the
 //! commands say so (the curvature near a flipped normal is wrong in sign and size).
 
-use crate::common::{mlscurv, run_ok, sphere, write_xyz};
+use crate::common::{mlscurv, printed_agreement, run_ok, sphere, write_xyz};
 
 const WARNING: &str = "the file's normals are not consistently oriented";
-
-/// The share of neighbour pairs that agree, as the warning prints it ("only 92.3% of").
-fn printed_agreement(stderr: &str) -> f64 {
-    let after = stderr
-        .split("only ")
-        .nth(1)
-        .expect("no share in the warning");
-    after.split('%').next().unwrap().parse().unwrap()
-}
 
 #[test]
 fn flipped_file_normals_are_warned_about_and_consistent_ones_are_not() {

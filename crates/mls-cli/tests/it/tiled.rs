@@ -7,7 +7,7 @@ use mls_io::{Attribute, AttributeData, Axis, Column, FileFormat};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
-use crate::common::{listing, mlscurv, run, run_ok};
+use crate::common::{listing, mlscurv, printed_agreement, run, run_ok};
 
 /// A budget that splits a few tens of thousands of points into tens of tiles: 64 MiB is the
 /// fixed part and about 5,200 loaded points.
@@ -136,15 +136,7 @@ fn a_tiled_run_warns_about_inconsistent_file_normals() {
         .find(|l| l.contains(WARNING))
         .unwrap_or_else(|| panic!("no warning in\n{}", r.stderr));
     assert!(warning.contains("bad.las"), "{warning}");
-    let agree: f64 = warning
-        .split("only ")
-        .nth(1)
-        .unwrap()
-        .split('%')
-        .next()
-        .unwrap()
-        .parse()
-        .unwrap();
+    let agree = printed_agreement(warning);
     let expected = 100.0 * (1.0 - 2.0 * 0.04 * 0.96);
     assert!(
         (agree - expected).abs() < 1.0,
