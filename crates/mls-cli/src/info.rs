@@ -106,7 +106,8 @@ fn info_report(a: &InfoArgs, out: &mut String) -> Result<()> {
                 .count();
             let graph =
                 NeighbourGraph::build_on(&indexed?, DEFAULT_NEIGHBOURS, Parallelism::Rayon)?;
-            let consistency = orientation_consistency(&graph, &normals, Parallelism::Rayon)?;
+            let consistency =
+                orientation_consistency(&points, &graph, &normals, Parallelism::Rayon)?;
             let verdict = match consistency {
                 Some(c) if c >= 0.99 => format!(
                     "consistently oriented ({:.2}% of neighbour pairs agree)",

@@ -191,7 +191,7 @@ fn orient_by_rule(
         Rule::Fixed(Orientation::None) => (0, 0, 0),
         _ => orient_along_tree(points, graph, estimates, rule, par),
     };
-    let consistency = consistency_of(graph, par, |i| {
+    let consistency = consistency_of(points, graph, par, |i| {
         estimates
             .get(i)
             .and_then(|e| e.as_ref().ok())

@@ -193,7 +193,7 @@ fn invalid_parameters_are_errors() {
     );
     let graph = NeighbourGraph::build(&points, 8, PAR).unwrap();
     assert!(matches!(
-        orientation_consistency(&graph, &[Vector::z(); 3], PAR),
+        orientation_consistency(&points, &graph, &[Vector::z(); 3], PAR),
         Err(NormalsError::LengthMismatch {
             points: 100,
             other: 3,
