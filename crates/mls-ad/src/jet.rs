@@ -280,7 +280,23 @@ pub fn jet_candidates(
             return None;
         }
         let (t1, t2, n) = *frame.get_or_insert_with(|| {
-            let sum: Vector3<f64> = near.iter().map(|(_, nu, w)| nu * *w).sum();
+            // The weighted average of the normals, unless it lies more than 60° from the
+            // nearest sample's normal (the far sheet of a thin part turned it): then only the
+            // normals on the nearest sample's side.
+            let own = samples
+                .iter()
+                .map(|s| ((s.point.coords - x).norm_squared(), s.normal))
+                .min_by(|a, b| a.0.total_cmp(&b.0))
+                .map_or_else(Vector3::zeros, |(_, nu)| nu);
+            let all: Vector3<f64> = near.iter().map(|(_, nu, w)| nu * *w).sum();
+            let sum: Vector3<f64> = if all.angle(&own).to_degrees() < 60.0 {
+                all
+            } else {
+                near.iter()
+                    .filter(|(_, nu, _)| nu.dot(&own) > 0.0)
+                    .map(|(_, nu, w)| nu * *w)
+                    .sum()
+            };
             let n = sum.normalize();
             // Our own tangent basis (any will do: the fit is rotation-invariant in (u, v)).
             let a = if n.z.abs() < 0.8 {

@@ -110,54 +110,137 @@ fn jet_matches_its_witness_with_and_without_slopes() {
                     .copied(),
             )
             .collect();
-        for normals in [NormalData::Slopes, NormalData::Ignore] {
-            let config = JetConfig {
-                normals,
-                ..JetConfig::default()
-            };
-            let results = surface.jet_at_points(&queries, &config, Parallelism::Rayon);
-            for (x, r) in queries.iter().zip(results) {
-                let w = mls_ad::jet_witness(&x.coords, &samples, h, &config);
-                let (j, w) = match (r, w) {
-                    (Ok(j), Some(w)) => (j, w),
-                    (r, w) => panic!("case {case} {normals:?} at {x:?}: {r:?} against {w:?}"),
-                };
-                let what = format!("case {case} {normals:?} at {x:?}");
-                assert_eq!(
-                    (j.fit.degree, j.fit.radius),
-                    (w.degree, w.radius),
-                    "{what}: degree and radius"
-                );
-                let kappa = w.k1.abs().max(w.k2.abs()).max(1.0 / h);
-                let rounding = 1e3 * f64::EPSILON * w.condition;
-                for (got, want, i) in [(j.curvature.k1, w.k1, 0), (j.curvature.k2, w.k2, 1)] {
-                    let e = (got - want).abs() / kappa;
-                    worst[i] = worst[i].max(e / rounding.max(K_THRESHOLD));
-                    assert!(
-                        e <= rounding.max(K_THRESHOLD),
-                        "{what}: k{} {got} against {want}",
-                        i + 1
-                    );
-                }
-                let pe = j.predicted_error();
-                let we = [0, 1].map(|i| w.sd[i].hypot(w.bias[i]));
-                let scale = we[0]
-                    .max(we[1])
-                    .max(1e3 * mls_core::jet::SD_FLOOR / w.radius);
-                let e = (pe[0] - we[0]).abs().max((pe[1] - we[1]).abs()) / scale;
-                worst[2] = worst[2].max(e / rounding.max(SD_THRESHOLD));
-                assert!(
-                    e <= rounding.max(SD_THRESHOLD),
-                    "{what}: predicted error {pe:?} against {we:?}"
-                );
-                let foot = j.foot.coords - w.foot;
-                assert!(foot.norm() <= 1e-9 * h, "{what}: foot {foot:?}");
-                compared += 1;
-            }
-        }
+        compared += compare_with_witness(
+            &format!("case {case}"),
+            &surface,
+            &samples,
+            &queries,
+            h,
+            &mut worst,
+        );
     }
     assert_eq!(compared, cases.len() * 2 * 24);
     eprintln!("worst k1, k2, predicted error, in units of their thresholds: {worst:?}");
+}
+
+/// Every query's jet, with and without slopes, against the witness's: degree and radius
+/// exactly, k1 and k2 within [`K_THRESHOLD`], the predicted error within [`SD_THRESHOLD`] (both
+/// scaled by the fit's conditioning), the foot within 1e-9 h. Returns the number compared and
+/// raises `worst` to each error in units of its threshold.
+fn compare_with_witness(
+    case: &str,
+    surface: &MlsSurface,
+    samples: &[Sample],
+    queries: &[Point],
+    h: f64,
+    worst: &mut [f64; 3],
+) -> usize {
+    let mut compared = 0;
+    for normals in [NormalData::Slopes, NormalData::Ignore] {
+        let config = JetConfig {
+            normals,
+            ..JetConfig::default()
+        };
+        let results = surface.jet_at_points(queries, &config, Parallelism::Rayon);
+        for (x, r) in queries.iter().zip(results) {
+            let w = mls_ad::jet_witness(&x.coords, samples, h, &config);
+            let (j, w) = match (r, w) {
+                (Ok(j), Some(w)) => (j, w),
+                (r, w) => panic!("{case} {normals:?} at {x:?}: {r:?} against {w:?}"),
+            };
+            let what = format!("{case} {normals:?} at {x:?}");
+            assert_eq!(
+                (j.fit.degree, j.fit.radius),
+                (w.degree, w.radius),
+                "{what}: degree and radius"
+            );
+            let kappa = w.k1.abs().max(w.k2.abs()).max(1.0 / h);
+            let rounding = 1e3 * f64::EPSILON * w.condition;
+            for (got, want, i) in [(j.curvature.k1, w.k1, 0), (j.curvature.k2, w.k2, 1)] {
+                let e = (got - want).abs() / kappa;
+                worst[i] = worst[i].max(e / rounding.max(K_THRESHOLD));
+                assert!(
+                    e <= rounding.max(K_THRESHOLD),
+                    "{what}: k{} {got} against {want}",
+                    i + 1
+                );
+            }
+            let pe = j.predicted_error();
+            let we = [0, 1].map(|i| w.sd[i].hypot(w.bias[i]));
+            let scale = we[0]
+                .max(we[1])
+                .max(1e3 * mls_core::jet::SD_FLOOR / w.radius);
+            let e = (pe[0] - we[0]).abs().max((pe[1] - we[1]).abs()) / scale;
+            worst[2] = worst[2].max(e / rounding.max(SD_THRESHOLD));
+            assert!(
+                e <= rounding.max(SD_THRESHOLD),
+                "{what}: predicted error {pe:?} against {we:?}"
+            );
+            let foot = j.foot.coords - w.foot;
+            assert!(foot.norm() <= 1e-9 * h, "{what}: foot {foot:?}");
+            compared += 1;
+        }
+    }
+    compared
+}
+
+/// A thin part: the patch and a far sheet 0.6 spacings beneath it with opposed normals and
+/// twice its samples, so that at most queries the weighted average of the support's normals
+/// faces the far sheet. The frame then averages only the normals on the nearest sample's side
+/// (the near sheet), in mls-core as in the witness, and every jet keeps the near sheet's
+/// normal.
+#[test]
+fn jet_matches_its_witness_across_a_thin_part() {
+    let mut rng = ChaCha8Rng::seed_from_u64(0x5eed_0004);
+    let n = 1500;
+    let h = 2.0 / (n as f64).sqrt();
+    let gap = 0.6 / (n as f64).sqrt();
+    let (mut points, mut normals) = patch(&mut rng, n, (0.0, 0.0, 0.0, 0.02));
+    let (far, far_normals) = patch(&mut rng, 2 * n, (0.0, 0.0, 0.0, 0.02));
+    points.extend(far.iter().map(|p| p - Vector::z() * gap));
+    normals.extend(far_normals.iter().map(|v| -v));
+    let surface = MlsSurface::new(&points, &normals, MlsConfig::new(h)).unwrap();
+    let samples = samples_of(&points, &normals);
+    let queries: Vec<Point> = points[..n]
+        .iter()
+        .filter(|p| p.x.abs().max(p.y.abs()) < 0.1)
+        .take(24)
+        .copied()
+        .collect();
+    // The queries whose whole average turned away: more than 60° from their own normal.
+    let turned = queries
+        .iter()
+        .filter(|q| {
+            let rho = JetConfig::default().radius * h;
+            let sum: Vector = samples
+                .iter()
+                .map(|s| (1.0 - (s.point - *q).norm_squared() / (rho * rho), s.normal))
+                .filter(|(t, _)| *t > 0.0)
+                .map(|(t, v)| v * (t * t * t))
+                .sum();
+            sum.angle(&Vector::z()).to_degrees() > 60.0
+        })
+        .count();
+    assert!(turned >= 12, "{turned} of 24 queries turned");
+    let mut worst = [0.0; 3];
+    let compared = compare_with_witness("thin part", &surface, &samples, &queries, h, &mut worst);
+    assert_eq!(compared, 48);
+    for config in [
+        JetConfig::default(),
+        JetConfig {
+            normals: NormalData::Ignore,
+            ..JetConfig::default()
+        },
+    ] {
+        for (q, r) in
+            queries
+                .iter()
+                .zip(surface.jet_at_points(&queries, &config, Parallelism::Rayon))
+        {
+            let n = r.unwrap().curvature.normal;
+            assert!(n.z > 0.9, "at {q}: normal {n}");
+        }
+    }
 }
 
 /// Where the ladder's first supports hold no slope they can fit (every normal within 2.3 h

@@ -101,16 +101,33 @@ impl Evaluator<'_> {
                 continue;
             }
             let frame = *frame.get_or_insert_with(|| {
-                // The frame normal: the input normals averaged with the jet's weights.
+                // The frame normal: the input normals averaged with the jet's weights. Across
+                // a thin part the far sheet's normals are opposed and may turn that average
+                // away from the query's own sheet; past 60° from the nearest sample's normal
+                // (where the fit would refuse that sample's slope) only the normals facing the
+                // nearest's way are averaged. Elsewhere, on folds sampled more coarsely than
+                // they bend, the whole average is the better frame (docs/accuracy.md).
                 let inv_r2 = 1.0 / (radius * radius);
-                let sum: Vector = self
+                let weighted = |s: &Sample| {
+                    let t = (1.0 - (s.point - local).norm_squared() * inv_r2).max(0.0);
+                    s.normal * (t * t * t)
+                };
+                let sum: Vector = self.support.iter().map(weighted).sum();
+                let d2 = |s: &Sample| (s.point - local).norm_squared();
+                let own = self
                     .support
                     .iter()
-                    .map(|s| {
-                        let t = (1.0 - (s.point - local).norm_squared() * inv_r2).max(0.0);
-                        s.normal * (t * t * t)
-                    })
-                    .sum();
+                    .min_by(|a, b| d2(a).total_cmp(&d2(b)))
+                    .map_or_else(Vector::zeros, |s| s.normal);
+                let sum = if sum.dot(&own) > 0.5 * sum.norm() * own.norm() {
+                    sum
+                } else {
+                    self.support
+                        .iter()
+                        .filter(|s| s.normal.dot(&own) > 0.0)
+                        .map(weighted)
+                        .sum()
+                };
                 UnitNormal::new(sum)
                     .ok()
                     .map(|n| jet::frame(&n.into_inner()))
