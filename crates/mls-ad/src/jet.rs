@@ -432,12 +432,13 @@ pub fn jet_candidates(
             accepted += 1;
         }
     }
-    // Least estimated squared error among the accepted scales; the bias of scale j is
-    // t_j √(c² + var c) from the weighted line k = k* + c t, t = (ρ/ρ₀)⁴, through every fit.
+    // Least estimated squared error among the accepted scales; for the choice the bias of
+    // scale j is t_j √(c² + var c) from the weighted line k = k* + c t, t = (ρ/ρ₀)⁴, through
+    // every fit; the candidate carries t_j √max(c² − var c, 0), the unbiased estimate.
     let t = |w: &JetWitness| (w.radius / ladder[0].radius).powi(4);
     let growth = [0, 1].map(|i| {
         if ladder.len() < 2 {
-            return 0.0;
+            return (0.0, 0.0);
         }
         let pts: Vec<(f64, f64, f64)> = ladder
             .iter()
@@ -462,17 +463,17 @@ pub fn jet_candidates(
         );
         let inv = a.try_inverse().unwrap_or_else(nalgebra::Matrix2::zeros);
         let c = (inv * b)[1];
-        (c * c + inv[(1, 1)]).sqrt()
+        (c * c, inv[(1, 1)])
     });
     Some(
         (0..accepted)
             .map(|j| {
-                let bias = growth.map(|g| g * t(&ladder[j]));
-                let w = JetWitness { bias, ..ladder[j] };
+                let cautious = growth.map(|(c2, var)| (c2 + var).sqrt() * t(&ladder[j]));
                 let mse = (0..2)
-                    .map(|i| w.sd[i].powi(2) + bias[i].powi(2))
+                    .map(|i| ladder[j].sd[i].powi(2) + cautious[i].powi(2))
                     .sum::<f64>();
-                (mse, w)
+                let bias = growth.map(|(c2, var)| (c2 - var).max(0.0).sqrt() * t(&ladder[j]));
+                (mse, JetWitness { bias, ..ladder[j] })
             })
             .collect(),
     )

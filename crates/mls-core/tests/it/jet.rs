@@ -574,3 +574,55 @@ fn a_shell_thinner_than_its_spacing_keeps_its_sheets_apart() {
         "curvature error up to {worst:.2e} (RMS {rms:.2e})"
     );
 }
+
+/// The bias a chosen point carries is the unbiased estimate `t √max(c² − var c, 0)` of the
+/// line through the ladder; the choice itself weighs the cautious `t √(c² + var c)`. Two fits
+/// at ρ and √2 ρ (t = 1 and 4) with sd 0.05: k1 steps by 0.3, so c = 0.1 and
+/// var c = 2 · 0.05² / 3², giving a bias of √(0.01 − 0.0025/4.5) at the first; k2 steps by
+/// 0.01, less than its own scatter, so its bias is 0 (the cautious form would say 0.024).
+#[test]
+fn the_chosen_scale_carries_the_unbiased_bias_estimate() {
+    use mls_core::jet::choose_scale;
+    use mls_core::{Curvature, JetFit, JetPoint, Matrix};
+
+    let point = |radius: f64, k1: f64, k2: f64| JetPoint {
+        foot: Point::origin(),
+        curvature: Curvature {
+            normal: Vector::z(),
+            k1,
+            k2,
+            mean: 0.5 * (k1 + k2),
+            gauss: k1 * k2,
+            d1: Vector::x(),
+            d2: Vector::y(),
+        },
+        sd: [0.05; 2],
+        bias: [0.0; 2],
+        fit: JetFit {
+            degree: 4,
+            radius,
+            neighbours: 100,
+            equations: 100,
+            coefficients: [0.0; 15],
+            noise: 0.0,
+            covariance: Matrix::zeros(),
+            slope_weight: 0.0,
+        },
+    };
+    let ladder = [
+        point(1.0, 1.0, 0.5),
+        point(std::f64::consts::SQRT_2, 1.3, 0.51),
+    ];
+    let chosen = choose_scale(&ladder, 2);
+    assert_eq!(chosen.fit.radius, 1.0);
+    let var_c = 2.0 * 0.05 * 0.05 / 9.0;
+    let want = (0.1f64 * 0.1 - var_c).sqrt();
+    assert!(
+        (chosen.bias[0] - want).abs() < 1e-12,
+        "k1 bias {}",
+        chosen.bias[0]
+    );
+    assert_eq!(chosen.bias[1], 0.0);
+    let [e1, e2] = chosen.predicted_error();
+    assert!((e1 - 0.05f64.hypot(want)).abs() < 1e-12 && e2 == 0.05);
+}
