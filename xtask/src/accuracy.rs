@@ -383,6 +383,16 @@ pub(crate) fn explore(only: Option<&String>) -> Result<()> {
                 ..JetConfig::default()
             }));
         }
+        // Degree 3 throughout, 5 and 6 scales (the ladder's bias law still ρ⁴): "Degree 3
+        // under noise" in docs/accuracy.md.
+        for scales in [5, 6] {
+            methods.push(Method::Jet(JetConfig {
+                degree: 3,
+                scales,
+                normals,
+                ..JetConfig::default()
+            }));
+        }
     }
     let mut md = String::new();
     for cloud in clouds(seed) {
@@ -697,6 +707,26 @@ the default.
   their neighbours, so their errors are correlated, which the per-sample sandwich assumes they
   are not. A second refinement pass changes little. It would need a covariance that knows the
   slopes came from the same positions.
+- **Where the estimated-normal gap comes from** (seed 1, the rows `Ignore` of `cargo xtask
+  accuracy-explore`): heights only in the frame of the *exact* normals give k1 nRMS 4.22e-4 on
+  the 10k random torus, in the frame of the estimated ones 4.09e-4, against 1.59e-4 with the
+  exact normals as slopes. The frame is not the gap (the linear terms absorb its tilt); the
+  slopes' information is, and the positions do not hold it.
+- **Degree 3 under noise** (seed 1; `jet deg 3` rows, the whole ladder at degree 3 with the
+  bias law left at ρ⁴; not adopted, the next step). Without normals on the σ = 1e-3 paper torus
+  k1 nRMS falls from 8.38e-2 to 4.14e-2, k2 from 7.66e-2 to 2.62e-2 and the k1 scatter from
+  0.42 to 0.14, but k1 gains a mean of +0.15: a degree-3 fit's bias grows as ρ² (the quartic
+  terms), not ρ⁴, so this ladder climbs too far. On the 10k random torus it is 20× worse
+  (9.7e-3: the bias at the smallest scale) and at σ = 1e-4 2× worse (1.7e-2). The reason: on a
+  symmetric support the quartic monomials are strongly correlated with the quadratic ones, the
+  odd cubic ones are not, so adding the cubics costs the curvature little variance and adding
+  the quartics triples it (a noisy unit sphere, σ = 0.2 spacings, weighted fits in the exact
+  frame at 6h: k1 RMS error 0.060 at degrees 2 and 3, 0.188 at degree 4). A per-point choice
+  between a degree-3 ladder (bias law ρ², a step between scales carrying the previous scale's
+  bias once instead of a third of it) and the degree-4 one, by least estimated sd² + bias²,
+  would keep degree 4 on clean data and take degree 3 under noise. Its degree-3 fits need no
+  moments of their own (their normal matrix is the leading 10 × 10 block of degree 4's); the
+  witness would repeat the pair of ladders and the choice.
 
 ## Targets of issue 11
 
