@@ -749,7 +749,9 @@ the default.
   slopes there (on the paper torus, where the slopes' truncation is the larger, they do better).
   The noisy torus with estimated normals has k1 σ 0.042 and 0.41 (the targets were measured with
   exact normals). The jet's curvature stage runs at 103 k points/s on the 1M sphere with file
-  normals on the 2-core Intel Xeon (71 k before this study's speed work): 2.4× short of 250 k. The
+  normals on the 2-core Intel Xeon (71 k before this study's speed work): 2.4× short of 250 k;
+  112 k on the 33 GFLOP/s-per-core AMD EPYC of 2026-12-06 (8.95 and 8.93 s in two runs of
+  `mlscurv curvature` on a binary PLY with normals, the whole command 9.5 s). The
   paper's method runs at 182–202 k on that Xeon (two runs of `cargo xtask bench`), 211 k on a
   33 GFLOP/s-per-core AMD EPYC (2026-12-06), and met the target at 366 k on the 50 GFLOP/s
   AMD EPYC of an earlier run (2026-12-04), a machine about 1.9× faster per CPU-second.
