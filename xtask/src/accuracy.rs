@@ -732,7 +732,11 @@ the default.
   decile's observed error 2.5× its prediction: under that noise the steps between degree-3
   fits are mostly scatter, so their ρ² bias is under-estimated and a too-large scale wins.
   14 % less error at σ = 1e-3 does not pay for a broken calibration; a bias estimate for the
-  degree-3 fits that does not come from their own noisy steps would be needed.
+  degree-3 fits that does not come from their own noisy steps would be needed: at one scale
+  the degree-3 and degree-4 fits share their samples and weights, their curvatures differ by
+  what the quartic terms explain, and that difference against its own scatter (computed from
+  both fits' linear maps, not as a difference of variances: the weights are not the inverse
+  variances) is a test of whether the quartic terms are worth their variance there.
 
 ## Targets of issue 11
 
