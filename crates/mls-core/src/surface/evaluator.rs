@@ -108,24 +108,27 @@ impl Evaluator<'_> {
                 // nearest's way are averaged. Elsewhere, on folds sampled more coarsely than
                 // they bend, the whole average is the better frame (docs/accuracy.md).
                 let inv_r2 = 1.0 / (radius * radius);
-                let weighted = |s: &Sample| {
-                    let t = (1.0 - (s.point - local).norm_squared() * inv_r2).max(0.0);
+                let weighted = |s: &Sample, d2: f64| {
+                    let t = (1.0 - d2 * inv_r2).max(0.0);
                     s.normal * (t * t * t)
                 };
-                let sum: Vector = self.support.iter().map(weighted).sum();
-                let d2 = |s: &Sample| (s.point - local).norm_squared();
-                let own = self
-                    .support
-                    .iter()
-                    .min_by(|a, b| d2(a).total_cmp(&d2(b)))
-                    .map_or_else(Vector::zeros, |s| s.normal);
+                // One pass for the average and the nearest sample (the first of equals).
+                let mut sum = Vector::zeros();
+                let (mut nearest, mut own) = (f64::INFINITY, Vector::zeros());
+                for s in &self.support {
+                    let d2 = (s.point - local).norm_squared();
+                    if d2 < nearest {
+                        (nearest, own) = (d2, s.normal);
+                    }
+                    sum += weighted(s, d2);
+                }
                 let sum = if sum.dot(&own) > 0.5 * sum.norm() * own.norm() {
                     sum
                 } else {
                     self.support
                         .iter()
                         .filter(|s| s.normal.dot(&own) > 0.0)
-                        .map(weighted)
+                        .map(|s| weighted(s, (s.point - local).norm_squared()))
                         .sum()
                 };
                 UnitNormal::new(sum)
