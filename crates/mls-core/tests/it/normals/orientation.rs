@@ -378,6 +378,14 @@ fn consistency_counts_each_neighbour_pair_once() {
         orientation_consistency(&points, &graph, &normals, SEQ).unwrap(),
         Some(1.0)
     );
+    // Normals 110° apart cannot tell either, whatever their lengths (3 and 5 here; their dot
+    // product, −5.1, is not compared with the unit normals' bound 1/2 but with 7.5).
+    let tilted = Vector::new(0.0, 110f64.to_radians().sin(), 110f64.to_radians().cos()) * 5.0;
+    let normals = [Vector::z() * 3.0, tilted, tilted];
+    assert_eq!(
+        orientation_consistency(&points, &graph, &normals, SEQ).unwrap(),
+        Some(1.0)
+    );
 }
 
 /// The facing counts of a voting rule: a normal 17° above horizontal faces `up` but is not
