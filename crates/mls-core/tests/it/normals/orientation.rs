@@ -386,6 +386,20 @@ fn consistency_counts_each_neighbour_pair_once() {
         orientation_consistency(&points, &graph, &normals, SEQ).unwrap(),
         Some(1.0)
     );
+    // A repeated point (chord 0, on no side of either tangent plane) can tell: the pairs are
+    // {0, 1}, opposed, and {2, 3}, agreeing.
+    let points = [
+        Point::new(0.0, 0.0, 0.0),
+        Point::new(0.0, 0.0, 0.0),
+        Point::new(3.0, 0.0, 0.0),
+        Point::new(4.0, 0.0, 0.0),
+    ];
+    let graph = NeighbourGraph::build(&points, 1, SEQ).unwrap();
+    let normals = [Vector::z(), -Vector::z(), Vector::z(), Vector::z()];
+    assert_eq!(
+        orientation_consistency(&points, &graph, &normals, SEQ).unwrap(),
+        Some(0.5)
+    );
 }
 
 /// The facing counts of a voting rule: a normal 17° above horizontal faces `up` but is not
