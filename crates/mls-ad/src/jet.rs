@@ -20,7 +20,7 @@ pub struct JetWitness {
     pub k2: f64,
     /// Predicted standard deviations of k1 and k2 (noise part).
     pub sd: [f64; 2],
-    /// Estimated bias of k1 and k2 from the neighbouring scale.
+    /// Estimated bias of k1 and k2 from the line through the ladder (its unbiased form).
     pub bias: [f64; 2],
     /// Degree fitted.
     pub degree: usize,

@@ -106,7 +106,7 @@ impl Evaluator<'_> {
                 // away from the query's own sheet; past 60° from the nearest sample's normal
                 // (where the fit would refuse that sample's slope) only the normals facing the
                 // nearest's way are averaged. Elsewhere, on folds sampled more coarsely than
-                // they bend, the whole average is the better frame (docs/accuracy.md).
+                // they bend, the whole average is the better frame (docs/derivation.md).
                 let inv_r2 = 1.0 / (radius * radius);
                 let weighted = |s: &Sample, d2: f64| {
                     let t = (1.0 - d2 * inv_r2).max(0.0);
