@@ -118,17 +118,19 @@ pub(super) fn open_reader(input: &Path) -> Result<LasReader> {
     Ok(LasReader::open(input)?)
 }
 
-/// Reads every point of `input` in chunks, calling `f` with each chunk's first index and
-/// cloud.
+/// Reads every point of `input` in chunks of at most `max_batch` points, calling `f` with
+/// each chunk's first index and cloud.
 pub(super) fn for_each_chunk(
     input: &Path,
     with_attributes: bool,
+    max_batch: u64,
     mut f: impl FnMut(u64, mls_io::PointCloud) -> Result<()>,
 ) -> Result<()> {
     let mut reader = open_reader(input)?;
     let mut first = 0u64;
-    // Several LAZ chunks per thread, about 30 MB of points and attributes.
-    let batch = reader.batch_len();
+    // Several LAZ chunks per thread, about 30 MB of points and attributes, unless the caller
+    // keeps more per point than that.
+    let batch = reader.batch_len().min(max_batch).max(1);
     loop {
         let mut chunk = reader.empty_cloud(batch as usize);
         if !with_attributes {

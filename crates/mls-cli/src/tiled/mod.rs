@@ -99,6 +99,17 @@ pub struct TiledSummary {
     pub agreement: Option<(u64, u64)>,
 }
 
+/// Points per batch of the write stage, which runs when no tile is loaded: as many as the
+/// tiles' share of the budget holds, at most the reader's own batch. A point of a batch costs
+/// its results as columns and as output records (twice [`RESULT_BYTES`]) and its input record
+/// three times: read, decoded into attributes, written again. Measured as the slope of peak
+/// resident memory over the batch size: about 500 bytes a point with 54-byte records (2M
+/// points, `--memory 100MiB`, batches of 25,000 to 100,000 points).
+fn write_batch(budget: u64, record_in: u64) -> u64 {
+    let per_point = 2 * RESULT_BYTES as u64 + 24 + 3 * record_in;
+    (budget.saturating_sub(FIXED_BYTES) / per_point).max(1 << 10)
+}
+
 /// Whether a run over `points` points fits in `budget` bytes without tiles.
 pub fn fits_in_memory(points: u64, budget: u64) -> bool {
     points.saturating_mul(BYTES_PER_POINT) <= budget.saturating_sub(FIXED_BYTES)
@@ -152,7 +163,7 @@ pub fn curvature(run: &TiledRun<'_>, t: &mut Timings) -> Result<TiledSummary> {
         Vector::repeat(f64::NEG_INFINITY),
     );
     t.time("scan", || {
-        for_each_chunk(run.input, false, |_, chunk| {
+        for_each_chunk(run.input, false, u64::MAX, |_, chunk| {
             for p in &chunk.points {
                 let p = Point::from(*p);
                 counts[grid.index_of(&p)] += 1;
@@ -237,7 +248,7 @@ pub fn curvature(run: &TiledRun<'_>, t: &mut Timings) -> Result<TiledSummary> {
                 .map(|i| work.path(&format!("tile{i}.pts")))
                 .collect(),
         )?;
-        for_each_chunk(run.input, false, |first, chunk| {
+        for_each_chunk(run.input, false, u64::MAX, |first, chunk| {
             for (k, p) in chunk.points.iter().enumerate() {
                 let mut bytes = [0u8; 56];
                 bytes[..8].copy_from_slice(&(first + k as u64).to_le_bytes());
@@ -326,7 +337,8 @@ pub fn curvature(run: &TiledRun<'_>, t: &mut Timings) -> Result<TiledSummary> {
         agreement: (!from_file).then_some((0, 0)),
     };
     t.time("write", || {
-        write_output(run, &work, &plan, &template, &mut summary)
+        let batch = write_batch(run.budget, record_in);
+        write_output(run, &work, &plan, &template, batch, &mut summary)
     })?;
     drop(work);
     Ok(summary)
@@ -383,7 +395,7 @@ fn sampled_scale(
         .map(|i| (i * take) / tiles.len() != ((i + 1) * take) / tiles.len())
         .collect();
     let mut points = Vec::new();
-    for_each_chunk(input, false, |_, chunk| {
+    for_each_chunk(input, false, u64::MAX, |_, chunk| {
         for p in &chunk.points {
             let p = Point::from(*p);
             if chosen[plan.tile_of(&p)] {

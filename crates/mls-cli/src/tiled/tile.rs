@@ -230,12 +230,17 @@ pub(super) fn evaluate_tile(
     Ok((source, agreement))
 }
 
-/// Reads the input again and writes each point with its tile's next result.
+/// Points sampled for the summary's percentiles (every k-th point): 5 MiB for its five columns.
+const SUMMARY_SAMPLE: u64 = 1 << 17;
+
+/// Reads the input again, `batch` points at a time, and writes each point with its tile's next
+/// result.
 pub(super) fn write_output(
     run: &TiledRun<'_>,
     work: &Workspace,
     plan: &TilePlan,
     template: &mls_io::LasTemplate,
+    batch: u64,
     summary: &mut TiledSummary,
 ) -> Result<()> {
     let tiles = plan.tiles().len();
@@ -249,12 +254,12 @@ pub(super) fn write_output(
     let mut results = open("out");
     let mut halos = summary.agreement.is_some().then(|| open("halo"));
     let jet = run.options.method == Method::Jet;
-    let stride = (summary.points / 1_000_000).max(1);
+    let stride = summary.points.div_ceil(SUMMARY_SAMPLE).max(1);
     let mut counts = vec![0u64; PointStatus::ALL.len() + 1];
     let mut renamed: Option<Vec<String>> = None;
     let compressed = run.format == FileFormat::Laz;
     mls_io::write_las_chunks(run.output, compressed, template, |sink| -> Result<()> {
-        for_each_chunk(run.input, run.keep_attributes, |first, chunk| {
+        for_each_chunk(run.input, run.keep_attributes, batch, |first, chunk| {
             let m = chunk.points.len();
             let mut out = CurvatureColumns::with_capacity(m, run.options);
             for (k, p) in chunk.points.iter().enumerate() {
