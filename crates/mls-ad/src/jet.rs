@@ -133,12 +133,15 @@ fn fit_once(
             b[r] = y * sw;
         }
         let mm = a.transpose() * &a;
-        // The degeneracy test is defined on M = AᵀΩA's Cholesky pivots (a pivot² below 1e-10
-        // of the largest diagonal entry).
+        // The degeneracy test is defined on M = AᵀΩA's Cholesky pivots: a pivot² below 1e-10
+        // of the largest diagonal entry, or below 1e-5 of its own (`DETERMINED_PIVOT`).
         let diag_max = (0..m).map(|i| mm[(i, i)]).fold(0.0f64, f64::max);
         let chol = nalgebra::Cholesky::new(mm.clone())?;
         let l = chol.l();
-        if (0..m).any(|i| !(l[(i, i)] * l[(i, i)] > 1e-10 * diag_max)) {
+        if (0..m).any(|i| {
+            let pivot2 = l[(i, i)] * l[(i, i)];
+            !(pivot2 > 1e-10 * diag_max && pivot2 > 1e-5 * mm[(i, i)])
+        }) {
             return None;
         }
         // LU of the dense normal equations (nalgebra's SVD lost digits on the worst-conditioned

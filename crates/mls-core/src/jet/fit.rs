@@ -7,8 +7,8 @@ use crate::kernels::{Kernels, dispatch};
 use crate::math::{Matrix, Point, Vector};
 
 use super::{
-    A02, A11, A20, JetConfig, JetFit, MIN_EQUATIONS_PER_COEFFICIENT, MONOMIALS, NormalData,
-    coefficient_count,
+    A02, A11, A20, DETERMINED_PIVOT, JetConfig, JetFit, MIN_EQUATIONS_PER_COEFFICIENT, MONOMIALS,
+    NormalData, coefficient_count,
 };
 
 /// Fits a jet of `config`'s degree and normal data to the `samples` within the support radius
@@ -637,8 +637,10 @@ fn dot_prefix(x: &[f64], y: &[f64], n: usize) -> f64 {
 
 impl<const N: usize> Factor<N> {
     /// Replaces the symmetric matrix `A` held in `l` by its lower Cholesky factor; false when
-    /// a squared pivot falls below `1e-10` of the largest diagonal entry: the basis is then
-    /// not determined by the samples (too few, or on a line), and fitting it would fit noise.
+    /// the samples do not determine the basis, and fitting it would fit noise or truncation:
+    /// a squared pivot below `1e-10` of the largest diagonal entry (too few samples, or on a
+    /// line), or below [`DETERMINED_PIVOT`] of its own diagonal entry (samples on a few lines:
+    /// a basis function nearly in the span of those before it).
     ///
     /// Right-looking (each column, then a rank-1 update of the rest): the updates are
     /// independent along a row, so they run as vector operations rather than one chain of
@@ -647,9 +649,14 @@ impl<const N: usize> Factor<N> {
     fn factor(&mut self) -> bool {
         let (l, inv_diag) = (&mut self.l, &mut self.inv_diag);
         let max_diag = (0..N).map(|i| l[i][i]).fold(0.0f64, f64::max);
+        // Each pivot's floor, from the diagonal before the updates.
+        let mut floor = [0.0; N];
+        for (k, f) in floor.iter_mut().enumerate() {
+            *f = (1e-10 * max_diag).max(DETERMINED_PIVOT * l[k][k]);
+        }
         for k in 0..N {
             let s = l[k][k];
-            if !(s > 1e-10 * max_diag) {
+            if !(s > floor[k]) {
                 return false;
             }
             l[k][k] = s.sqrt();
@@ -734,5 +741,25 @@ mod tests {
         };
         assert!(!at(1e-10));
         assert!(at(2e-10));
+    }
+
+    /// A basis function whose part outside the span of the one before it is a fraction `δ` of
+    /// its norm has the squared pivot `δ²` of its diagonal entry: refused at half of
+    /// `DETERMINED_PIVOT`, factored at twice it, whatever its scale against the first.
+    #[test]
+    fn a_basis_function_nearly_in_the_span_of_the_others_is_refused() {
+        let at = |delta2: f64, scale: f64| {
+            // Unit vectors at angle θ, sin²θ = δ², the second scaled by `scale`.
+            let c = (1.0 - delta2).sqrt() * scale;
+            let mut f = Factor::<2> {
+                l: [[1.0, c], [c, scale * scale]],
+                inv_diag: [0.0; 2],
+            };
+            f.factor()
+        };
+        for scale in [1.0, 1e-2] {
+            assert!(!at(0.5 * DETERMINED_PIVOT, scale), "scale {scale}");
+            assert!(at(2.0 * DETERMINED_PIVOT, scale), "scale {scale}");
+        }
     }
 }
