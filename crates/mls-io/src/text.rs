@@ -202,7 +202,28 @@ pub(crate) fn read_xyz_slots(
                     .split_ascii_whitespace()
                     .next()
                     .is_some_and(|t| t.parse::<u64>().is_ok());
-            if std::mem::replace(&mut first_row, false) && is_count_line {
+            let first = std::mem::replace(&mut first_row, false);
+            if first && is_count_line {
+                continue;
+            }
+            // A first row with no number among its tokens cannot be a point: it names the
+            // columns, as a header row of other tools' text exports does without `//` or `#`.
+            if first
+                && found >= 3
+                && text
+                    .split_ascii_whitespace()
+                    .all(|t| t.parse::<f64>().is_err())
+            {
+                if options.columns.is_none() && named.is_none() {
+                    let description = text.split_ascii_whitespace().collect::<Vec<_>>().join(",");
+                    let columns =
+                        ColumnNames::parse(&description).map_err(|message| ReadError::Header {
+                            file: name.to_owned(),
+                            line,
+                            message: format!("the first row names the columns: {message}"),
+                        })?;
+                    named = Some((columns, line));
+                }
                 continue;
             }
             if found < 3 {

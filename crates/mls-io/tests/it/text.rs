@@ -128,6 +128,35 @@ fn xyz_column_names_from_a_cloudcompare_header() {
 }
 
 #[test]
+fn xyz_column_names_from_a_first_row_of_names() {
+    // Other tools write the names as a plain first row: no token is a number, so it is no point.
+    let text = "X Y Z Nx Ny Nz intensity\n1 2 3 0 0 1 7\n4 5 6 0 0 -1 8\n";
+    let cloud = read_xyz(text.as_bytes(), "named.xyz").unwrap();
+    assert_eq!(cloud.points, [[1.0, 2.0, 3.0], [4.0, 5.0, 6.0]]);
+    assert_eq!(cloud.normals, Some(vec![[0.0, 0.0, 1.0], [0.0, 0.0, -1.0]]));
+    let names: Vec<&str> = cloud.attributes.iter().map(|a| a.name.as_str()).collect();
+    assert_eq!(names, ["intensity"]);
+    // Colour stays colour; --columns overrides the row's names.
+    let cloud = read_xyz("x y z r g b\n1 2 3 1 0 0\n".as_bytes(), "rgb.xyz").unwrap();
+    assert_eq!(cloud.normals, None);
+    let outcome = read_with("x y z nx ny nz\n1 2 3 0 0 1\n", Some("x,y,z,a,b,c")).unwrap();
+    assert_eq!(outcome.cloud.normals, None);
+    assert_eq!(outcome.cloud.points, [[1.0, 2.0, 3.0]]);
+    // Names without x, y and z are an error at that row; a row with a number is data, and a
+    // later row of names is not a number.
+    let err = read_xyz("a b c\n1 2 3\n".as_bytes(), "abc.xyz").unwrap_err();
+    assert!(
+        err.to_string()
+            .starts_with("abc.xyz: header line 1: the first row names the columns"),
+        "{err}"
+    );
+    let err = read_xyz("x 2 3\n".as_bytes(), "x.xyz").unwrap_err();
+    assert!(err.to_string().contains("not a number"), "{err}");
+    let err = read_xyz("1 2 3\nx y z\n".as_bytes(), "late.xyz").unwrap_err();
+    assert!(err.to_string().starts_with("late.xyz: line 2"), "{err}");
+}
+
+#[test]
 fn xyz_column_names_from_a_comment_that_names_every_column() {
     // As mlscurv writes XYZ: the names come back, so a result re-read keeps them.
     let text = "# made by mlscurv\n# x y z nx ny nz k1 status\n1 2 3 0 0 1 0.5 0\n";
