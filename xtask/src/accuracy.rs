@@ -607,8 +607,20 @@ const CONCLUSIONS: &str = "
   moving the random clouds; on well-spread random clouds fewer than 1 fit in 10⁴ has a pivot
   below 1e-4 of its own entry. The smallest bound of that plateau was kept. The rows of
   \"Studied, not adopted\" below were measured before it.
+- **Normals along one line** (2026-12-06). A covariance normal whose neighbourhood lies along
+  one line, straight or curved (`λ1 < 1e-2 λ2`, `normals::LINE_RATIO`), is estimated again from
+  4k and then 16k neighbours, with h widened to half their radius. Scan lines or rings farther
+  apart than 16 neighbours reach gave the line's own plane as the normal, silently: on a
+  cylinder in rings 16× farther apart than their points every normal was the axis, `--method
+  paper` reported k1 = k2 = 0 at every point and the jet no curvature at all; now every normal
+  is radial (within 0.2°), the jet's k1 error over the middle rings is 2.1e-3 (three rings
+  within its largest support: degree 2) and the paper's k2 is −0.5 (its h, from a spacing
+  measured along the rings, does not bridge them). Here 0.3 % of the scanlines' points (line
+  ends at the rim) are re-estimated: jet k1 nRMS 6.08e-3 → 5.87e-3 with estimated normals, the
+  paper's 1.61e-1 → 1.45e-1; no other row moves. The \"Determined degree\" figures above are
+  from before this change.
 - **Calibration** (observed RMS error / predicted, by decile of the prediction): 0.52–1.89 on the
-  random, jittered, ellipsoid and noisy clouds, with file or estimated normals; 1.48 and 4.34 at
+  random, jittered, ellipsoid and noisy clouds, with file or estimated normals; 1.48 and 4.40 at
   most on the scanlines with file and with estimated normals, where the issue sets no bound; on
   the grid with file normals
   the lowest deciles over-predict by up to 3.7× (the lead's errors there are smaller than its

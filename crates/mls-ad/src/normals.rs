@@ -18,7 +18,9 @@ pub struct NormalWitness {
 
 /// The normal of `points[index]` from itself and its `k` nearest other points (all others
 /// when there are at most `k`), weights `θ = exp(−|q − p|²/h²)`; `None` when the
-/// neighbourhood is degenerate (fewer than 3 points, or `λ1 − λ0 ≤ tolerance · λ2`).
+/// neighbourhood is degenerate (fewer than 3 points, `λ1 − λ0 ≤ tolerance · λ2`, or
+/// `λ1 < 1e-2 λ2`: along one line, `LINE_RATIO`) with `4k` and with `16k` neighbours too, where
+/// h is widened to half the distance of the farthest neighbour if that is larger.
 pub fn normal_witness(
     index: usize,
     points: &[Point3<f64>],
@@ -34,10 +36,28 @@ pub fn normal_witness(
         .map(|(j, q)| ((q - p).norm_squared(), j))
         .collect();
     others.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-    others.truncate(k);
-    let offsets: Vec<Vector3<f64>> = std::iter::once(Vector3::zeros())
-        .chain(others.iter().map(|&(_, j)| points[j] - p))
-        .collect();
+    for times in [1, 4, 16] {
+        let m = (k * times).min(others.len());
+        let offsets: Vec<Vector3<f64>> = std::iter::once(Vector3::zeros())
+            .chain(others[..m].iter().map(|&(_, j)| points[j] - p))
+            .collect();
+        let scale = if times == 1 {
+            h
+        } else {
+            h.max(others[..m].last().map_or(0.0, |o| o.0.sqrt()) / 2.0)
+        };
+        if let Some(w) = covariance_normal(&offsets, scale, tolerance) {
+            return Some(w);
+        }
+        if m == others.len() && times > 1 {
+            break;
+        }
+    }
+    None
+}
+
+/// The weighted covariance normal of `offsets` (the point itself first, at zero).
+fn covariance_normal(offsets: &[Vector3<f64>], h: f64, tolerance: f64) -> Option<NormalWitness> {
     if offsets.len() < 3 {
         return None;
     }
@@ -65,7 +85,7 @@ pub fn normal_witness(
     order.sort_by(|&a, &b| values[a].total_cmp(&values[b]));
     let eigenvalues = order.map(|i| values[i].max(0.0));
     let [l0, l1, l2] = eigenvalues;
-    if !(l2 > 0.0 && l1 - l0 > tolerance * l2) {
+    if !(l2 > 0.0 && l1 - l0 > tolerance * l2 && l1 >= 1e-2 * l2) {
         return None;
     }
     Some(NormalWitness {

@@ -14,9 +14,11 @@
 //!    the neighbour graph (Hoppe et al. 1992), one sign per connected component chosen by the
 //!    [`Orientation`] rule (outward, or a vote of the points towards a viewpoint or upwards).
 //!
-//! [`estimate_normals`] runs all four. A point whose normal cannot be estimated (too few or
-//! collinear neighbours) gets [`PointStatus::NormalEstimationFailed`] and takes no part in the
-//! orientation; that is data, not an error. [`NormalsError`] is for invalid parameters and
+//! [`estimate_normals`] runs all four; where step 3 fails with `k` neighbours (too few,
+//! collinear, or along one line: scan lines farther apart than `k` neighbours reach) it tries
+//! again with `4k` and `16k`. A point whose normal cannot be estimated then gets
+//! [`PointStatus::NormalEstimationFailed`] and takes no part in the orientation; that is data,
+//! not an error. [`NormalsError`] is for invalid parameters and
 //! input the whole computation cannot proceed with.
 
 mod estimate;
@@ -25,7 +27,8 @@ mod orient;
 mod spacing;
 
 pub use estimate::{
-    DEFAULT_DEGENERACY_TOLERANCE, NormalEstimate, estimate_unoriented, normal_from_neighbourhood,
+    DEFAULT_DEGENERACY_TOLERANCE, LINE_RATIO, NormalEstimate, estimate_unoriented,
+    normal_from_neighbourhood,
 };
 pub use graph::NeighbourGraph;
 pub use orient::{
@@ -213,6 +216,9 @@ pub fn estimate_normals_on(
         Some(h) => estimate_unoriented(points, &graph, h, config.degeneracy_tolerance, par)?,
         None => vec![Err(PointStatus::NormalEstimationFailed); points.len()],
     };
+    if let Some(h) = h {
+        regrow_failed(cloud, points, config, h, &mut estimates, par);
+    }
     let report = orient_normals(points, &graph, &mut estimates, config.orientation, par)?;
     Ok(EstimatedNormals {
         estimates,
@@ -221,6 +227,70 @@ pub fn estimate_normals_on(
         graph,
         report,
     })
+}
+
+/// Neighbourhoods of [`regrow_failed`], in multiples of the configured `k`.
+const REGROWN: [usize; 2] = [4, 16];
+
+/// Estimates again, from 4k and then 16k nearest neighbours, the normals that failed with k:
+/// on scan lines or rings farther apart than k neighbours reach, those lie along one line
+/// ([`LINE_RATIO`]). The Gaussian scale is widened to half the grown neighbourhood's radius
+/// where h is smaller, so that the other lines weigh in. A normal that fails with 16k too
+/// stays failed. Clouds whose k-neighbourhoods all span a surface are untouched.
+fn regrow_failed(
+    cloud: &IndexedCloud<'_>,
+    points: &[Point],
+    config: &NormalsConfig,
+    h: f64,
+    estimates: &mut [Result<NormalEstimate, PointStatus>],
+    par: Parallelism,
+) {
+    let failed: Vec<usize> = (0..estimates.len())
+        .filter(|&i| estimates[i].is_err())
+        .collect();
+    if failed.is_empty() {
+        return;
+    }
+    let mut rank = vec![0_usize; cloud.len()];
+    for (s, &i) in cloud.order.iter().enumerate() {
+        rank[i as usize] = s;
+    }
+    let regrown = par.map(failed.len(), 16, |f| {
+        let i = failed[f];
+        let at = cloud.local(rank[i]);
+        let mut result = Err(PointStatus::NormalEstimationFailed);
+        for times in REGROWN {
+            let Some(wanted) = std::num::NonZeroUsize::new((config.k * times + 1).min(cloud.len()))
+            else {
+                break;
+            };
+            let hits = cloud
+                .tree
+                .query(&at)
+                .nearest_n::<kiddo::SquaredEuclidean<f64>>(wanted)
+                .execute();
+            let neighbourhood: Vec<Point> = hits
+                .iter()
+                .map(|hit| points[cloud.order[hit.item as usize] as usize])
+                .collect();
+            let radius = hits.last().map_or(0.0, |hit| hit.distance.sqrt());
+            result = normal_from_neighbourhood(
+                &points[i],
+                &neighbourhood,
+                h.max(radius / 2.0),
+                config.degeneracy_tolerance,
+            );
+            if result.is_ok() || wanted.get() == cloud.len() {
+                break;
+            }
+        }
+        result
+    });
+    for (&i, e) in failed.iter().zip(regrown) {
+        if e.is_ok() {
+            estimates[i] = e;
+        }
+    }
 }
 
 /// Checks a Gaussian scale: finite, positive, with a finite `1/h²`.
