@@ -4,7 +4,7 @@
 //! counted shell by shell (mls-core sorts the nodes of a square), the median of the local
 //! spacings, and `h = factor × median`.
 
-use nalgebra::Point3;
+use nalgebra::{Matrix3, Point3, Vector3};
 
 /// The witness's spacing of a cloud.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -41,19 +41,51 @@ pub fn spacing_witness(points: &[Point3<f64>], k: usize, factor: f64) -> Option<
         return None;
     }
     let k = k.min(distinct.len() - 1);
-    let rho = grid_rms_by_shells(k);
+    // Where the k nearest lie along one line (second eigenvalue of their covariance, the point
+    // included, below 1e-2 of the largest: `LINE_RATIO`), 4k and then 16k are taken.
+    let ks = [
+        k,
+        (4 * k).min(distinct.len() - 1),
+        (16 * k).min(distinct.len() - 1),
+    ];
+    let rho = ks.map(grid_rms_by_shells);
     let mut local: Vec<f64> = distinct
         .iter()
         .enumerate()
         .map(|(i, p)| {
-            let mut d2: Vec<f64> = distinct
+            let mut near: Vec<(f64, usize)> = distinct
                 .iter()
                 .enumerate()
                 .filter(|&(j, _)| j != i)
-                .map(|(_, q)| (q - p).norm_squared())
+                .map(|(j, q)| ((q - p).norm_squared(), j))
                 .collect();
-            d2.sort_by(f64::total_cmp);
-            (d2[..k].iter().sum::<f64>() / k as f64).sqrt() / rho
+            near.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+            let spacing = |m: usize, rho: f64| {
+                (near[..m].iter().map(|n| n.0).sum::<f64>() / m as f64).sqrt() / rho
+            };
+            let along_one_line = |m: usize| {
+                let offsets: Vec<Vector3<f64>> = near[..m]
+                    .iter()
+                    .map(|&(_, j)| distinct[j] - p)
+                    .chain(std::iter::once(Vector3::zeros()))
+                    .collect();
+                let mean = offsets.iter().sum::<Vector3<f64>>() / offsets.len() as f64;
+                let cov = offsets.iter().fold(Matrix3::zeros(), |c, d| {
+                    let r = d - mean;
+                    c + r * r.transpose()
+                });
+                let (values, _) = crate::normals::jacobi(cov);
+                let mut l = values.map(|v| v.max(0.0));
+                l.sort_by(f64::total_cmp);
+                l[2] > 0.0 && l[1] < 1e-2 * l[2]
+            };
+            let mut level = 0;
+            let mut value = spacing(ks[0], rho[0]);
+            while level < 2 && ks[level + 1] > ks[level] && along_one_line(ks[level]) {
+                level += 1;
+                value = spacing(ks[level], rho[level]);
+            }
+            value
         })
         .collect();
     local.sort_by(f64::total_cmp);

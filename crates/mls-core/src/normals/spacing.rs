@@ -6,7 +6,7 @@ use kiddo::{ImmutableKdTree, SquaredEuclidean};
 
 use super::{NormalsError, bounding_box_centre, check_points, check_scale};
 use crate::error::InputError;
-use crate::math::Point;
+use crate::math::{Matrix, Point, Vector};
 use crate::surface::Parallelism;
 
 /// Neighbours per point that [`spacing_statistics`] uses by default.
@@ -121,7 +121,9 @@ pub struct SpacingStats {
 /// duplicates are removed first, as repeated points (merged scans) would otherwise pull the
 /// distances to zero; the median makes it robust to a minority of near-duplicates and
 /// outliers. On anisotropic scan lines (pitch `a` along, `b` across) it tends to `√(ab)`, the
-/// spacing of the same density, not the smaller `a`.
+/// spacing of the same density, not the smaller `a`; where the `k` neighbours all lie along one
+/// line ([`super::LINE_RATIO`]: lines farther apart than `k` reach) `s(p)` is measured again
+/// with `4k`, then `16k` neighbours (and their `ρ`), which reach the next lines.
 ///
 /// `k = 0` is rejected; a cloud with at most `k` distinct positions uses all of them.
 pub fn spacing_statistics(
@@ -195,11 +197,23 @@ pub(crate) fn spacing_on_tree(
     par: Parallelism,
     detect_duplicates: bool,
 ) -> Option<SpacingStats> {
-    let rho = square_grid_rms_distance(k);
+    // Where k neighbours lie along one line (scan lines farther apart than they reach) they
+    // measure the spacing along it: it is measured again with 4k, then 16k.
+    let ks = [k, (4 * k).min(n - 1), (16 * k).min(n - 1)];
+    let rho = ks.map(square_grid_rms_distance);
     let measured = n.div_ceil(stride);
     let per_point = |j: usize| {
         let i = j * stride;
-        local_distances(tree, &coord(i), i, k, rho, detect_duplicates)
+        let (mut row, mut line) = local_distances(tree, &coord, i, k, rho[0], detect_duplicates)?;
+        let mut level = 0;
+        while line && level < 2 && ks[level + 1] > ks[level] {
+            level += 1;
+            let (grown, grown_line) =
+                local_distances(tree, &coord, i, ks[level], rho[level], false)?;
+            row[2] = grown[2];
+            line = grown_line;
+        }
+        Some(row)
     };
     let rows: Vec<Option<[f64; 3]>> = par.map(measured, 256, per_point);
     let rows: Vec<[f64; 3]> = rows.into_iter().collect::<Option<_>>()?;
@@ -220,38 +234,53 @@ pub(crate) fn spacing_on_tree(
     })
 }
 
-/// Nearest distance, k-th distance and calibrated local spacing of position `i` (at `at`);
-/// `None` when `detect_duplicates` and another position coincides with it.
+/// For item `i`: the distances to its nearest and its `k`-th nearest other position and its
+/// local spacing, and whether those `k` neighbours with it lie along one line, straight or
+/// curved (the second eigenvalue of their covariance below [`super::LINE_RATIO`] of the
+/// largest). `None` with `detect_duplicates` when another position coincides with it.
 fn local_distances(
     tree: &ImmutableKdTree<f64, 3>,
-    at: &[f64; 3],
+    coord: &impl Fn(usize) -> [f64; 3],
     i: usize,
     k: usize,
     rho: f64,
     detect_duplicates: bool,
-) -> Option<[f64; 3]> {
+) -> Option<([f64; 3], bool)> {
     let Some(wanted) = NonZeroUsize::new(k + 1) else {
-        return Some([f64::NAN; 3]);
+        return Some(([f64::NAN; 3], false));
     };
+    let at = coord(i);
     let hits = tree
-        .query(at)
+        .query(&at)
         .nearest_n::<SquaredEuclidean<f64>>(wanted)
         .execute();
     // Positions are distinct, so the point itself is the only hit to skip.
-    let d2: Vec<f64> = hits
-        .iter()
-        .filter(|h| h.item as usize != i)
-        .take(k)
-        .map(|h| h.distance)
-        .collect();
+    let others = || hits.iter().filter(|h| h.item as usize != i).take(k);
+    let d2: Vec<f64> = others().map(|h| h.distance).collect();
     if detect_duplicates && d2.first().is_some_and(|&d| d == 0.0) {
         return None;
     }
     let (Some(&first), Some(&last)) = (d2.first(), d2.last()) else {
-        return Some([f64::NAN; 3]);
+        return Some(([f64::NAN; 3], false));
     };
     let mean_d2 = d2.iter().sum::<f64>() / d2.len() as f64;
-    Some([first.sqrt(), last.sqrt(), mean_d2.sqrt() / rho])
+    // The covariance of the neighbourhood, the point included, about its mean.
+    let centre = Vector::from(at);
+    let offsets: Vec<Vector> = others()
+        .map(|h| Vector::from(coord(h.item as usize)) - centre)
+        .chain(std::iter::once(Vector::zeros()))
+        .collect();
+    let mean = offsets.iter().sum::<Vector>() / offsets.len() as f64;
+    let cov = offsets.iter().fold(Matrix::zeros(), |c, d| {
+        let r = d - mean;
+        c + r * r.transpose()
+    });
+    let line = nalgebra::SymmetricEigen::try_new(cov, f64::EPSILON, 1000).is_some_and(|e| {
+        let mut l = [0, 1, 2].map(|j| e.eigenvalues[j].max(0.0));
+        l.sort_unstable_by(f64::total_cmp);
+        l[2] > 0.0 && l[1] < super::LINE_RATIO * l[2]
+    });
+    Some(([first.sqrt(), last.sqrt(), mean_d2.sqrt() / rho], line))
 }
 
 /// The root mean square distance from a node of the square grid of unit pitch to its `k`

@@ -51,6 +51,29 @@ fn spacing_of_a_square_grid_is_its_pitch() {
     assert!((h - DEFAULT_H_FACTOR * stats.spacing).abs() < 1e-15);
 }
 
+/// Scan lines 20 times farther apart than the points along them: the 12 nearest neighbours lie
+/// on one line and measured 2.5 steps along it (0.025 here). Such neighbourhoods are measured
+/// again with 48, then 192, which reach the next lines: the spacing is the root of the area
+/// per sample, `√(ab)` (0.0447), within 10 %.
+#[test]
+fn spacing_of_scan_lines_farther_apart_than_the_neighbours_reach_is_the_root_of_area_per_point() {
+    let (along, across) = (0.01, 0.2);
+    let rot = Rotation3::from_euler_angles(0.3, -0.5, 1.1);
+    let lines: Vec<Point> = (0..40)
+        .flat_map(|j| {
+            (0..400).map(move |i| Point::new(f64::from(i) * along, f64::from(j) * across, 0.0))
+        })
+        .map(|p| rot * p)
+        .collect();
+    let stats = spacing_statistics(&lines, DEFAULT_SPACING_NEIGHBOURS, PAR).unwrap();
+    let want = (along * across).sqrt();
+    assert!(
+        (stats.spacing / want - 1.0).abs() < 0.1,
+        "spacing {} for √(ab) = {want}",
+        stats.spacing
+    );
+}
+
 #[test]
 fn spacing_of_a_fibonacci_sphere_is_the_root_of_area_per_point() {
     for (n, radius) in [(5000, 2.0), (800, 0.01)] {
