@@ -42,7 +42,8 @@ pub fn spacing_witness(points: &[Point3<f64>], k: usize, factor: f64) -> Option<
     }
     let k = k.min(distinct.len() - 1);
     // Where the k nearest lie along one line (second eigenvalue of their covariance, the point
-    // included, below 1e-2 of the largest: `LINE_RATIO`), 4k and then 16k are taken.
+    // included, below 1e-2 of the largest: `LINE_RATIO`), 4k and then 16k are taken, the first
+    // that spans a surface; a point on one line with 16k too (a wire) keeps k.
     let ks = [
         k,
         (4 * k).min(distinct.len() - 1),
@@ -79,13 +80,15 @@ pub fn spacing_witness(points: &[Point3<f64>], k: usize, factor: f64) -> Option<
                 l.sort_by(f64::total_cmp);
                 l[2] > 0.0 && l[1] < 1e-2 * l[2]
             };
+            // The first neighbourhood that spans a surface; a wire keeps k.
             let mut level = 0;
-            let mut value = spacing(ks[0], rho[0]);
             while level < 2 && ks[level + 1] > ks[level] && along_one_line(ks[level]) {
                 level += 1;
-                value = spacing(ks[level], rho[level]);
+                if !along_one_line(ks[level]) {
+                    return spacing(ks[level], rho[level]);
+                }
             }
-            value
+            spacing(ks[0], rho[0])
         })
         .collect();
     local.sort_by(f64::total_cmp);

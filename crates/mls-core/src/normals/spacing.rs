@@ -123,7 +123,8 @@ pub struct SpacingStats {
 /// outliers. On anisotropic scan lines (pitch `a` along, `b` across) it tends to `√(ab)`, the
 /// spacing of the same density, not the smaller `a`; where the `k` neighbours all lie along one
 /// line ([`super::LINE_RATIO`]: lines farther apart than `k` reach) `s(p)` is measured again
-/// with `4k`, then `16k` neighbours (and their `ρ`), which reach the next lines.
+/// with `4k`, then `16k` neighbours (and their `ρ`), and the first that spans a surface is
+/// kept; a point whose `16k` neighbours still lie along one line (a wire) keeps its `k`.
 ///
 /// `k = 0` is rejected; a cloud with at most `k` distinct positions uses all of them.
 pub fn spacing_statistics(
@@ -198,7 +199,8 @@ pub(crate) fn spacing_on_tree(
     detect_duplicates: bool,
 ) -> Option<SpacingStats> {
     // Where k neighbours lie along one line (scan lines farther apart than they reach) they
-    // measure the spacing along it: it is measured again with 4k, then 16k.
+    // measure the spacing along it: it is measured again with 4k, then 16k, and the first that
+    // spans a surface is kept. A point still on one line with 16k (a wire) keeps its k.
     let ks = [k, (4 * k).min(n - 1), (16 * k).min(n - 1)];
     let rho = ks.map(square_grid_rms_distance);
     let measured = n.div_ceil(stride);
@@ -210,7 +212,9 @@ pub(crate) fn spacing_on_tree(
             level += 1;
             let (grown, grown_line) =
                 local_distances(tree, &coord, i, ks[level], rho[level], false)?;
-            row[2] = grown[2];
+            if !grown_line {
+                row[2] = grown[2];
+            }
             line = grown_line;
         }
         Some(row)

@@ -54,7 +54,7 @@ fn spacing_of_a_square_grid_is_its_pitch() {
 /// Scan lines 20 times farther apart than the points along them: the 12 nearest neighbours lie
 /// on one line and measured 2.5 steps along it (0.025 here). Such neighbourhoods are measured
 /// again with 48, then 192, which reach the next lines: the spacing is the root of the area
-/// per sample, `√(ab)` (0.0447), within 10 %.
+/// per sample, `√(ab)` (0.0447), within 10 %. A single line keeps the 12's measure.
 #[test]
 fn spacing_of_scan_lines_farther_apart_than_the_neighbours_reach_is_the_root_of_area_per_point() {
     let (along, across) = (0.01, 0.2);
@@ -71,6 +71,15 @@ fn spacing_of_scan_lines_farther_apart_than_the_neighbours_reach_is_the_root_of_
         (stats.spacing / want - 1.0).abs() < 0.1,
         "spacing {} for √(ab) = {want}",
         stats.spacing
+    );
+    // One line alone (a wire) stays on one line with 192 neighbours too, and keeps the 12's
+    // measure, 2.55 steps (192 would give about 10).
+    let wire: Vec<Point> = lines[..400].to_vec();
+    let stats = spacing_statistics(&wire, DEFAULT_SPACING_NEIGHBOURS, PAR).unwrap();
+    assert!(
+        (stats.spacing / along - 2.55).abs() < 0.01,
+        "wire spacing {}",
+        stats.spacing / along
     );
 }
 
