@@ -279,11 +279,13 @@ fn local_distances(
         let r = d - mean;
         c + r * r.transpose()
     });
-    let line = nalgebra::SymmetricEigen::try_new(cov, f64::EPSILON, 1000).is_some_and(|e| {
-        let mut l = [0, 1, 2].map(|j| e.eigenvalues[j].max(0.0));
+    // Eigenvalues only; the QR iteration has no cap, so nothing not finite enters it.
+    let line = cov.iter().all(|v| v.is_finite()) && {
+        let values = cov.symmetric_eigenvalues();
+        let mut l = [0, 1, 2].map(|j| values[j].max(0.0));
         l.sort_unstable_by(f64::total_cmp);
         l[2] > 0.0 && l[1] < super::LINE_RATIO * l[2]
-    });
+    };
     Some(([first.sqrt(), last.sqrt(), mean_d2.sqrt() / rho], line))
 }
 
