@@ -152,6 +152,17 @@ pub fn read_xyz_with(
     read_xyz_slots(reader, name, options, &SLOT_NAMES)
 }
 
+/// The column names of a whitespace-separated row of names (line `line` of `file`); an error
+/// says `what` the row was taken for.
+fn names_row(row: &str, file: &str, line: usize, what: &str) -> Result<ColumnNames, ReadError> {
+    let description = row.split_ascii_whitespace().collect::<Vec<_>>().join(",");
+    ColumnNames::parse(&description).map_err(|message| ReadError::Header {
+        file: file.to_owned(),
+        line,
+        message: format!("{what}: {message}"),
+    })
+}
+
 /// [`read_xyz_with`], reading the leading [`SLOT_NAMES`] `slots` as geometry and any other
 /// column as an attribute.
 pub(crate) fn read_xyz_slots(
@@ -181,16 +192,7 @@ pub(crate) fn read_xyz_slots(
         }
         if let Some(header) = text.trim_start().strip_prefix("//") {
             if roles.is_empty() && options.columns.is_none() && named.is_none() {
-                let description = header
-                    .split_ascii_whitespace()
-                    .collect::<Vec<_>>()
-                    .join(",");
-                let columns =
-                    ColumnNames::parse(&description).map_err(|message| ReadError::Header {
-                        file: name.to_owned(),
-                        line,
-                        message: format!("column names after `//`: {message}"),
-                    })?;
+                let columns = names_row(header, name, line, "column names after `//`")?;
                 named = Some((columns, line));
             }
             continue;
@@ -215,13 +217,7 @@ pub(crate) fn read_xyz_slots(
                     .all(|t| t.parse::<f64>().is_err())
             {
                 if options.columns.is_none() && named.is_none() {
-                    let description = text.split_ascii_whitespace().collect::<Vec<_>>().join(",");
-                    let columns =
-                        ColumnNames::parse(&description).map_err(|message| ReadError::Header {
-                            file: name.to_owned(),
-                            line,
-                            message: format!("the first row names the columns: {message}"),
-                        })?;
+                    let columns = names_row(text, name, line, "the first row names the columns")?;
                     named = Some((columns, line));
                 }
                 continue;
