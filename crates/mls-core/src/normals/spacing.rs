@@ -270,12 +270,13 @@ fn local_distances(
     let mean_d2 = d2.iter().sum::<f64>() / d2.len() as f64;
     // The covariance of the neighbourhood, the point included, about its mean.
     let centre = Vector::from(at);
-    let offsets: Vec<Vector> = others()
-        .map(|h| Vector::from(coord(h.item as usize)) - centre)
-        .chain(std::iter::once(Vector::zeros()))
-        .collect();
-    let mean = offsets.iter().sum::<Vector>() / offsets.len() as f64;
-    let cov = offsets.iter().fold(Matrix::zeros(), |c, d| {
+    let offsets = || {
+        others()
+            .map(|h| Vector::from(coord(h.item as usize)) - centre)
+            .chain(std::iter::once(Vector::zeros()))
+    };
+    let mean = offsets().sum::<Vector>() / (d2.len() + 1) as f64;
+    let cov = offsets().fold(Matrix::zeros(), |c, d| {
         let r = d - mean;
         c + r * r.transpose()
     });
