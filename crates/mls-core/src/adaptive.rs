@@ -6,9 +6,10 @@
 //! number of samples in the kernel. Here each point picks its own scale from a ladder
 //! `h_j = h_min · √2^j`:
 //!
-//! 1. **Local spacing.** Scales below `min_h_factor` × the local spacing at the point (from the
-//!    kernel's own weight sum, `s = √(π h² / Σw)` for a uniform density) under-resolve the
-//!    sampling and are skipped, so `h_min` may be set for the densest region.
+//! 1. **Local spacing.** Scales below `min_h_factor` × the local spacing at the query (from the
+//!    kernel's own weight sum there, `s = √(π h² / Σw)` for a uniform density) under-resolve
+//!    the sampling and are skipped, so `h_min` may be set for the densest region. Measured at
+//!    the query, not at its projection, a skipped scale costs no projection.
 //! 2. **Noise.** σ is estimated at the first usable scale from the samples within 2h: their
 //!    heights over the local quadric of the MLS normal and principal curvatures, less a
 //!    weighted least-squares cubic in the tangent coordinates (so that a tilt, a curvature
@@ -233,22 +234,40 @@ impl AdaptiveSurface {
             }
             let h = surface.kernel().h();
             let at_scale: Vec<Point> = active.iter().map(|&i| queries[i]).collect();
+            let last = j + 1 == scales;
+            // A scale is used where it resolves the local spacing s = √(π h² / Σw) at the
+            // query (Σw its kernel's weight sum there), h ≥ min_h_factor · s; the largest
+            // scale is the best there is in a sparse region.
+            let min_weight_sum = if last {
+                0.0
+            } else {
+                std::f64::consts::PI * config.min_h_factor * config.min_h_factor
+            };
             let results = match at {
-                Location::Input => surface.curvature_at_points(&at_scale, par),
-                Location::Projected => surface.project_points(&at_scale, par),
+                Location::Input => surface
+                    .curvature_at_points(&at_scale, par)
+                    .into_iter()
+                    .map(|r| {
+                        r.map(|r| {
+                            let weight_sum = r.implicit.weight_sum * (-r.implicit.log_scale).exp();
+                            (weight_sum >= min_weight_sum).then_some(r)
+                        })
+                    })
+                    .collect(),
+                // Tested before projecting: where most of a cloud is sparser than the first
+                // scale resolves, that saves a projection per point.
+                Location::Projected => {
+                    surface.project_points_resolved(&at_scale, min_weight_sum, par)
+                }
             };
             // Admissible estimates, with the noise estimate where the point has none yet.
             let needs_noise: Vec<bool> =
                 active.iter().map(|&i| states[i].noise.is_none()).collect();
-            let last = j + 1 == scales;
             let step = |ev: &mut crate::surface::Evaluator<'_>, k: usize| {
-                let r = results[k].as_ref().map_err(|s| *s)?;
-                let weight_sum = r.implicit.weight_sum * (-r.implicit.log_scale).exp();
-                let spacing = (std::f64::consts::PI * h * h / weight_sum).sqrt();
-                // The largest scale is the best there is in a sparse region.
-                if !(h >= config.min_h_factor * spacing) && !last {
+                let Some(r) = results[k]? else {
                     return Ok(None);
-                }
+                };
+                let weight_sum = r.implicit.weight_sum * (-r.implicit.log_scale).exp();
                 let noise = needs_noise[k].then(|| residual_noise(ev, &r.point, &r.curvature, h));
                 Ok(Some((
                     Estimate {
@@ -420,23 +439,25 @@ fn residual_noise(ev: &mut crate::surface::Evaluator<'_>, x: &Point, c: &Curvatu
             })
         })
         .collect();
-    let mut normal = nalgebra::SMatrix::<f64, 10, 10>::zeros();
+    type Square = nalgebra::SMatrix<f64, 10, 10>;
+    let (mut normal, mut normal2) = (Square::zeros(), Square::zeros());
     let mut rhs = Basis::zeros();
     let (mut sw, mut srr) = (0.0, 0.0);
     for (w, phi, r) in &rows {
-        normal += *w * phi * phi.transpose();
+        let outer = phi * phi.transpose();
+        normal += *w * outer;
+        normal2 += (w * w) * outer;
         rhs += *w * *r * phi;
         sw += w;
         srr += w * r * r;
     }
     // Residual sum of squares of the weighted fit, and its expectation per unit σ²:
-    // E[Σ w e²] = σ² (Σ w − Σ w² φᵀ A⁻¹ φ) for independent noise of variance σ².
+    // E[Σ w e²] = σ² (Σ w − Σ w² φᵀ A⁻¹ φ) for independent noise of variance σ², the last
+    // sum being tr(A⁻¹ Σ w² φ φᵀ).
     let (explained, leverage) = match normal.cholesky() {
         Some(ch) => (
             rhs.dot(&ch.solve(&rhs)),
-            rows.iter()
-                .map(|(w, phi, _)| w * w * phi.dot(&ch.solve(phi)))
-                .sum::<f64>(),
+            ch.inverse().component_mul(&normal2).sum(),
         ),
         // Samples on a line do not determine the cubic terms: the offset alone.
         None => (

@@ -88,6 +88,8 @@ pub struct FieldScratch {
     weighed: usize,
     /// Samples in the blocks since the last [`Self::load`], for [`Self::reload_moved`].
     count: usize,
+    /// `Σ w` of the last [`Self::loaded_normal`], unshifted.
+    weight_sum: f64,
 }
 
 impl FieldScratch {
@@ -130,10 +132,12 @@ impl FieldScratch {
     /// n(x) alone (Eq. 2), without derivatives, from the samples last loaded by
     /// [`FieldScratch::load`]. It uses them up: load again before [`evaluate_loaded`].
     pub(crate) fn loaded_normal(&mut self) -> Result<Vector, PointStatus> {
+        self.weight_sum = 0.0;
         if self.len == 0 {
             return Err(PointStatus::NoNeighbours);
         }
         let weight_sum = self.weigh_loaded();
+        self.weight_sum = weight_sum * (-self.shift).exp();
         let blocks = &self.blocks[..self.weighed];
         let m = Vector::from_fn(|c, _| {
             let mut sum = [0.0; LANES];
@@ -147,6 +151,11 @@ impl FieldScratch {
             return Err(PointStatus::NormalUndefined);
         }
         Ok(m / r)
+    }
+
+    /// `Σ w` (unshifted) of the samples the last [`Self::loaded_normal`] weighed, or 0.
+    pub(crate) fn normal_weight_sum(&self) -> f64 {
+        self.weight_sum
     }
 
     /// The shifted weights of the samples last loaded, in place of their squared lengths (the

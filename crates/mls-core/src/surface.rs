@@ -246,12 +246,29 @@ impl MlsSurface {
         })
     }
 
+    /// [`Self::project_points`] where the kernel's weight sum at the query is at least
+    /// `min_weight_sum` ([`Evaluator::project_resolved`]); `None` elsewhere.
+    pub(crate) fn project_points_resolved(
+        &self,
+        queries: &[Point],
+        min_weight_sum: f64,
+        par: Parallelism,
+    ) -> Vec<Result<Option<SurfacePoint>, PointStatus>> {
+        self.map_clusters(queries, par, |ev, cluster| {
+            cluster
+                .iter()
+                .map(|&i| (i, ev.project_resolved(&queries[i], min_weight_sum)))
+                .collect()
+        })
+    }
+
     /// Runs `run` on clusters of [`CLUSTER`] queries (indices into `queries`) taken in Morton
     /// order, so that a cluster's queries are close together and consecutive clusters touch
     /// neighbouring samples, and returns the results in query order.
-    fn map_clusters<F>(&self, queries: &[Point], par: Parallelism, run: F) -> Vec<PointResult>
+    fn map_clusters<T, F>(&self, queries: &[Point], par: Parallelism, run: F) -> Vec<T>
     where
-        F: Fn(&mut Evaluator<'_>, &[usize]) -> Vec<(usize, PointResult)> + Sync,
+        T: Copy + Send + Sync,
+        F: Fn(&mut Evaluator<'_>, &[usize]) -> Vec<(usize, T)> + Sync,
     {
         let half_extent = queries
             .iter()
@@ -259,7 +276,7 @@ impl MlsSurface {
             .fold(0.0f64, |m, q| m.max((q - self.index.origin).coords.amax()));
         let key = |i: &usize| morton_key(&(queries[*i] - self.index.origin), half_extent);
         let mut order: Vec<usize> = (0..queries.len()).collect();
-        let pairs: Vec<(usize, PointResult)> = match par {
+        let pairs: Vec<(usize, T)> = match par {
             Parallelism::Sequential => {
                 order.sort_by_cached_key(key);
                 let mut ev = self.evaluator();

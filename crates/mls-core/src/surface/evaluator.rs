@@ -386,6 +386,20 @@ impl Evaluator<'_> {
     /// Projects the world-space point `x` onto the MLS surface (Amenta–Kil) and evaluates the
     /// curvature there.
     pub fn project(&mut self, x: &Point) -> PointResult {
+        // Every support has a weight sum of at least 0: none is refused.
+        self.project_resolved(x, 0.0)?
+            .ok_or(PointStatus::TooFewNeighbours)
+    }
+
+    /// [`Self::project`] where the kernel's weight sum `Σ w` at `x` (the samples' density in
+    /// units of `1/h²`) is at least `min_weight_sum`; `None` without projecting where it is
+    /// not. The adaptive ladder skips a scale too small for the local spacing this way, for
+    /// the price of one weighing instead of a projection.
+    pub(crate) fn project_resolved(
+        &mut self,
+        x: &Point,
+        min_weight_sum: f64,
+    ) -> Result<Option<SurfacePoint>, PointStatus> {
         if !x.iter().all(|c| c.is_finite()) {
             return Err(PointStatus::InvalidQuery);
         }
@@ -407,7 +421,9 @@ impl Evaluator<'_> {
         let mut gathered_at: Option<Point> = None;
         // Where the scratch last loaded the candidates (all of them), while they stay the same.
         let mut loaded_at: Option<Point> = None;
-        for _ in 0..cfg.max_iterations {
+        // The last step's length, for the rate of convergence (none before the first).
+        let mut last_step = f64::NAN;
+        for iteration in 0..cfg.max_iterations {
             if gathered_at.is_none_or(|c| (local - c).norm() > margin) {
                 self.gather_candidates(&local, radius.map(|r| r + margin));
                 gathered_at = Some(local);
@@ -439,7 +455,11 @@ impl Evaluator<'_> {
                     .load(&local, &self.candidates, f64::INFINITY, a),
             };
             loaded_at = Some(local);
-            let n = self.scratch.loaded_normal()?;
+            let n = self.scratch.loaded_normal();
+            if iteration == 0 && !(self.scratch.normal_weight_sum() >= min_weight_sum) {
+                return Ok(None);
+            }
+            let n = n?;
             let moments = self.scratch.line_moments(&n);
             let t = line_minimum(
                 moments,
@@ -455,10 +475,24 @@ impl Evaluator<'_> {
             // Below the position's own rounding (8 ulps) no step can be resolved, whatever
             // `tolerance · h` asks for.
             let resolution = 8.0 * f64::EPSILON * local.coords.amax();
-            if t.abs() < (cfg.tolerance * h).max(resolution) {
+            let tolerance = (cfg.tolerance * h).max(resolution);
+            // The steps after the first shrink geometrically (the normal turns little over a
+            // step), by a ratio ρ, so the steps still to come add up to about |t| ρ/(1 − ρ).
+            // Where that sum, with a margin of 10, is below the tolerance, the next step
+            // would be too: it is not taken.
+            let step = t.abs();
+            let ratio = step / last_step;
+            // NaN before a second step: no prediction.
+            let remaining = if ratio < 0.5 {
+                10.0 * step * ratio / (1.0 - ratio)
+            } else {
+                f64::INFINITY
+            };
+            if step < tolerance || remaining < tolerance {
                 converged = true;
                 break;
             }
+            last_step = step;
         }
         if !converged {
             return Err(PointStatus::ProjectionFailed);
@@ -471,11 +505,11 @@ impl Evaluator<'_> {
         let implicit = self.implicit_at_local(&local)?;
         let curvature = curvature(&implicit.gradient, &implicit.hessian)
             .ok_or(PointStatus::GradientVanishes)?;
-        Ok(SurfacePoint {
+        Ok(Some(SurfacePoint {
             point: local + s.index.origin,
             curvature,
             implicit,
-        })
+        }))
     }
 }
 

@@ -3,7 +3,7 @@
 
 use mls_core::{MlsConfig, MlsSurface, Point, PointStatus, Vector};
 
-use crate::clouds::fibonacci_sphere;
+use crate::clouds::{fibonacci_sphere, wavy_patch};
 
 const SPACING: f64 = 0.02;
 
@@ -97,6 +97,53 @@ fn projection_onto_a_sphere_converges_to_a_zero_of_g() {
             r.curvature.normal
         );
     }
+}
+
+/// A projection stops once the steps still to come, shrinking geometrically, would add up to
+/// less than its tolerance. Where it stops lies within that tolerance of where a tolerance 100
+/// times smaller takes it, and on the zero set of g to within 10 tolerances: g sums the
+/// kernel's support, the line searches also the samples up to 1.5h beyond it, whose weights
+/// are below exp(−25) ≈ 1.4e-11 of the nearest sample's. On a wavy, jittered patch with
+/// tilted normals, where the normal field turns along the way (on a sphere the first step
+/// lands).
+#[test]
+fn a_projection_stops_within_its_tolerance_of_the_converged_point() {
+    use mls_core::ProjectionConfig;
+
+    let spacing = 0.02;
+    let (pts, nrm) = wavy_patch(7, spacing, 0.5, 0.1);
+    let h = 2.0 * spacing;
+    let tolerance = ProjectionConfig::default().tolerance;
+    let surface = MlsSurface::new(&pts, &nrm, MlsConfig::new(h)).unwrap();
+    let mut tighter = MlsConfig::new(h);
+    tighter.projection.tolerance = 0.01 * tolerance;
+    let reference = MlsSurface::new(&pts, &nrm, tighter).unwrap();
+    let (mut ev, mut full) = (surface.evaluator(), reference.evaluator());
+    let mut tested = 0;
+    for (i, p) in pts.iter().enumerate().step_by(5) {
+        if p.x.abs().max(p.y.abs()) > 0.25 {
+            continue;
+        }
+        // Off the surface by up to 0.6h, along a direction tilted from the normal.
+        let f = (i % 7) as f64 / 3.0 - 1.0;
+        let start = p + Vector::new(0.3 * f, -0.2, 1.0) * (0.6 * h * f);
+        let stopped = ev.project(&start).unwrap();
+        let off = stopped.implicit.value / stopped.implicit.gradient.norm();
+        assert!(
+            off.abs() <= 10.0 * tolerance * h,
+            "from {start}: {:e} h off the zero set of g",
+            off / h
+        );
+        let converged = full.project(&start).unwrap().point;
+        let apart = (stopped.point - converged).norm();
+        assert!(
+            apart <= tolerance * h,
+            "from {start}: {:e} h from the converged point",
+            apart / h
+        );
+        tested += 1;
+    }
+    assert!(tested > 100, "{tested} projections");
 }
 
 #[test]
