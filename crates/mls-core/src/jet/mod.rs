@@ -42,6 +42,7 @@ use crate::curvature::{Curvature, curvature};
 use crate::math::{Matrix, Point, Vector, tangent_basis};
 use crate::status::PointStatus;
 
+mod algebra;
 mod fit;
 
 pub(crate) use fit::jet_fit;
