@@ -253,7 +253,10 @@ def curvature(
     orient : str
         Orientation of estimated normals, per tile: ``"up"`` (default, as the binary's tiled
         run), ``"viewpoint:X,Y,Z"``, ``"mst"`` (outward from each tile, rarely what a cloud
-        cut in tiles needs) or ``"none"``.
+        cut in tiles needs) or ``"none"``. Each task sees only its own tile, so the tiles'
+        signs are not compared as the binary's tiled run compares them (it warns below 99 %
+        agreement in the overlaps): for a closed object, not a sheet seen from above, pass
+        ``normals`` or a viewpoint.
     memory : str or int
         Memory one tile task may use (``"300MiB"``, ``"2GiB"``, bytes), as ``--memory``.
     max_cells : int
