@@ -360,10 +360,39 @@ impl PyPlan {
 /// Rows and tiles of [`PyPlan::loads`].
 type Pairs<'py> = (Bound<'py, PyArray1<i64>>, Bound<'py, PyArray1<i64>>);
 
+/// `(agree, compared)` over pairs of sign codes that two tiles gave the same points (uint8
+/// arrays of equal length; see `_tile_curvature`): [`tiled::signs_agree`], the tiled run's
+/// overlap rule.
+#[pyfunction]
+pub(crate) fn _overlap_counts<'py>(
+    mine: &Bound<'py, PyAny>,
+    theirs: &Bound<'py, PyAny>,
+) -> PyResult<(u64, u64)> {
+    let mine: Vec<u8> = crate::files::values(mine, "uint8")?;
+    let theirs: Vec<u8> = crate::files::values(theirs, "uint8")?;
+    if mine.len() != theirs.len() {
+        return Err(PyValueError::new_err(format!(
+            "sign codes: {} against {}",
+            mine.len(),
+            theirs.len()
+        )));
+    }
+    Ok(mine
+        .iter()
+        .zip(&theirs)
+        .filter_map(|(&a, &b)| tiled::signs_agree(a, b))
+        .fold((0, 0), |(agree, compared), same| {
+            (agree + u64::from(same), compared + 1)
+        }))
+}
+
 /// The curvature at a tile's own points (`core`, a bool per row) of the surface of all its
 /// `points` (own and halo, in the cloud's order), built in the frame of the whole cloud's box
 /// `lo`..`hi`: [`tiled::tile_curvature`], the step the binary's out-of-core run takes per
-/// tile. Returns a `Result` of the own points, with the columns of `curvature`.
+/// tile. Returns a `Result` of the own points, with the columns of `curvature`, and with
+/// estimated normals the sign code of every point's normal (own and halo, a uint8 each: 0 for
+/// none, else `1 + 2·axis + (component < 0)` of its largest component), which the caller
+/// compares between the tiles that load a point, as the binary's tiled run does.
 #[pyfunction]
 #[pyo3(signature = (
     points, normals, core, *, h, lo, hi, cutoff=Some(CutoffArg::Factor(5.0)), method="jet",
@@ -383,7 +412,7 @@ pub(crate) fn _tile_curvature<'py>(
     orient: &str,
     name: &str,
     threads: Option<usize>,
-) -> PyResult<Table> {
+) -> PyResult<(Table, Option<Bound<'py, PyArray1<u8>>>)> {
     let orientation = crate::orient(orient)?;
     let options = CurvatureOptions {
         surface: SurfaceOptions {
@@ -434,10 +463,11 @@ pub(crate) fn _tile_curvature<'py>(
         .map_err(pipeline_error)?;
     let TileResult {
         columns: out,
+        codes,
         source,
         agreement,
-        ..
     } = result;
+    let codes = (!from_file).then(|| codes.into_pyarray(py));
     // Judged per tile: each Dask task sees only its own.
     let warnings: Vec<String> = agreement
         .and_then(|a| pipeline::file_normals_warning(a, name))
@@ -462,5 +492,5 @@ pub(crate) fn _tile_curvature<'py>(
         timings,
         warnings,
     };
-    Ok(Table::new("curvature", columns, arrays, summary))
+    Ok((Table::new("curvature", columns, arrays, summary), codes))
 }

@@ -169,6 +169,61 @@ def test_estimated_normals_are_close(client, cloud):
     assert close.mean() >= 0.99, close.mean()
 
 
+def random_sphere(n: int, radius: float, seed: int):
+    """Points uniformly at random on a sphere about the origin."""
+    v = np.random.default_rng(seed).normal(size=(n, 3))
+    return radius * v / np.linalg.norm(v, axis=1)[:, None]
+
+
+def test_tiles_that_disagree_on_the_estimated_normals_signs_are_reported(client, tmp_path):
+    """Each tile orients its own estimated normals. On terrain every overlap agrees; a closed
+    sphere in tiles, each oriented up, disagrees in a seventh of its overlaps (the binary's
+    tiled run warns below 99 %), and half its k1 are negative: `overlap_agreement` says so and
+    `curvature_files` warns, naming the file. A viewpoint inside orients every tile one way."""
+    points, _ = terrain(60_000, 150.0, SEED)
+    flat = mlscurv.dask.curvature(
+        da.from_array(points, chunks=CHUNK), h=H, method="paper", memory=SMALL
+    )
+    (share,) = dask.compute(flat["overlap_agreement"])
+    assert share >= mlscurv.dask.MIN_OVERLAP_AGREEMENT, share
+
+    sphere = random_sphere(30_000, 10.0, SEED)
+    shares = {}
+    for orient in ["up", "viewpoint:0,0,0"]:
+        lazy = mlscurv.dask.curvature(
+            da.from_array(sphere, chunks=CHUNK), h=0.4, method="paper", orient=orient,
+            memory=SMALL,
+        )
+        shares[orient], k1 = dask.compute(lazy["overlap_agreement"], lazy["k1"])
+        if orient == "up":
+            assert 0.2 < np.mean(k1 < 0) < 0.8
+    assert shares["up"] < 0.95, shares
+    assert shares["viewpoint:0,0,0"] >= mlscurv.dask.MIN_OVERLAP_AGREEMENT, shares
+
+    for cloud_points, warned in [(sphere, True), (points, False)]:
+        path = tmp_path / ("sphere.ply" if warned else "terrain.ply")
+        mlscurv.write(path, {"points": cloud_points})
+        out = tmp_path / f"out-{path.name}"
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            mlscurv.dask.curvature_files(
+                [path], [out], h=0.4 if warned else H, method="paper", memory=SMALL
+            )
+        said = [str(w.message) for w in caught if "differ between tiles" in str(w.message)]
+        assert bool(said) == warned, said
+        assert all(w.startswith(f"{path}: ") for w in said), said
+
+
+def test_given_normals_have_no_overlap_agreement(cloud):
+    """With given normals no tile orients anything: the result has no `overlap_agreement`."""
+    points, normals = cloud
+    lazy = mlscurv.dask.curvature(
+        da.from_array(points, chunks=CHUNK), da.from_array(normals, chunks=(CHUNK, 3)), h=H,
+        memory=SMALL,
+    )
+    assert "overlap_agreement" not in lazy
+
+
 def test_inconsistent_file_normals_are_warned_about(cloud):
     """Each tile judges the file normals' signs as the single call does: 4 % flipped is
     warned about (run in this process, where the warning can be caught), consistent ones are

@@ -33,7 +33,7 @@ use mls_io::FileFormat;
 use files::{TileWriters, Workspace, for_each_chunk, open_reader};
 pub use files::{available_memory, parse_size};
 use tile::{RESULT_BYTES, evaluate_tile, write_output};
-pub use tile::{TileResult, tile_curvature};
+pub use tile::{TileResult, signs_agree, tile_curvature};
 
 use crate::evaluate;
 use crate::pipeline::{self, Scale, Timings};

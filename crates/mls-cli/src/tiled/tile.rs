@@ -29,6 +29,12 @@ fn sign_code(n: Option<&Vector>) -> u8 {
     1 + 2 * axis as u8 + u8::from(n[axis] < 0.0)
 }
 
+/// Whether two tiles' sign codes of one point's normal are compared (both defined, on the same
+/// axis) and, if so, whether they agree: the overlap check of a tiled run.
+pub fn signs_agree(mine: u8, theirs: u8) -> Option<bool> {
+    (mine != 0 && theirs != 0 && (mine - 1) / 2 == (theirs - 1) / 2).then_some(mine == theirs)
+}
+
 /// The results of one tile's own points.
 #[derive(Debug)]
 pub struct TileResult {
@@ -312,10 +318,9 @@ pub(super) fn write_output(
                         if let Err(e) = halos.read_exact(t, &mut b) {
                             error = error.take().or(Some(e));
                         }
-                        // Same axis: compare the signs.
-                        if mine != 0 && b[0] != 0 && (mine - 1) / 2 == (b[0] - 1) / 2 {
+                        if let Some(same) = signs_agree(mine, b[0]) {
                             *compared += 1;
-                            *agree += u64::from(mine == b[0]);
+                            *agree += u64::from(same);
                         }
                     });
                     if let Some(e) = error {

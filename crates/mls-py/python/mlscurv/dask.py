@@ -15,6 +15,8 @@ wires them into a graph:
 3. *tiles*: one task per tile gathers its parts from the chunks and computes the curvature at
    its own points.
 4. *scatter*: each chunk of the result takes its points' rows back from the tiles.
+5. *overlaps* (estimated normals): each tile's halo points' normal signs are compared with
+   those their own tiles gave them, as the binary's tiled run compares them.
 
 It runs on whatever cluster the ``distributed.Client`` in use reaches: a ``LocalCluster``,
 dask-jobqueue's ``SLURMCluster``, dask-kubernetes' ``KubeCluster``; there is no scheduler here.
@@ -23,6 +25,7 @@ dask-jobqueue's ``SLURMCluster``, dask-kubernetes' ``KubeCluster``; there is no 
 from __future__ import annotations
 
 import os
+import warnings
 from typing import Dict, List, Optional, Sequence, Union
 
 import numpy as np
@@ -39,6 +42,10 @@ MAX_CELLS = 1 << 16
 
 # The arrays of a result of shape (N, 3); the others are of shape (N,).
 _VECTORS = ("normals", "d1", "d2")
+
+# Below this share of agreeing signs in the tiles' overlaps the estimated normals are not
+# oriented one way across tiles (the binary's tiled run warns at the same share).
+MIN_OVERLAP_AGREEMENT = 0.99
 
 
 def _columns(method: str) -> List[str]:
@@ -119,16 +126,44 @@ def _tile(plan, tile, options, *parts):
     points = np.concatenate([p[1] for p in parts])
     normals = None if parts[0][2] is None else np.concatenate([p[2] for p in parts])
     core = plan.tile_of(points) == tile
-    result = _mlscurv._tile_curvature(
+    result, codes = _mlscurv._tile_curvature(
         points, normals, core, name=f"points (tile {tile})", **options
     )
     names = _columns(options["method"])
-    return rows[core], {n: getattr(result, n) for n in names}
+    # The sign codes of the estimated normals: the own points' and the halo's, by row.
+    signs = None if codes is None else (codes[core], rows[~core], codes[~core])
+    return rows[core], {n: getattr(result, n) for n in names}, signs
+
+
+def _own_signs(result):
+    """A tile's own rows and their sign codes (small: what the overlap check moves)."""
+    rows, _, signs = result
+    return rows, signs[0]
+
+
+def _overlap(result, *owners):
+    """``[agree, compared]`` over the halo points of one tile's result, each against the sign
+    code its own tile gave it, by the binary's rule (``_overlap_counts``). ``owners`` are
+    ``_own_signs`` of every tile that can own a point of this halo."""
+    _, halo_rows, halo_codes = result[2]
+    rows = np.concatenate([o[0] for o in owners]) if owners else np.empty(0, np.int64)
+    codes = np.concatenate([o[1] for o in owners]) if owners else np.empty(0, np.uint8)
+    order = np.argsort(rows, kind="stable")
+    rows, codes = rows[order], codes[order]
+    at = np.minimum(np.searchsorted(rows, halo_rows), max(len(rows) - 1, 0))
+    found = (rows[at] == halo_rows) if len(rows) else np.zeros(len(halo_rows), bool)
+    agree, compared = _mlscurv._overlap_counts(codes[at[found]], halo_codes[found])
+    return np.array([agree, compared], np.int64)
+
+
+def _share(pair):
+    agree, compared = (int(v) for v in pair)
+    return np.float64(agree / compared) if compared else np.float64(np.nan)
 
 
 def _rows_in(result, first, end):
     """The rows of a tile's result that fall in the chunk of rows ``first..end``."""
-    rows, arrays = result
+    rows, arrays, _ = result
     take = (rows >= first) & (rows < end)
     if not take.any():
         return None
@@ -178,8 +213,9 @@ def _plan(points, normals, *, h, cutoff, method, capacity, max_cells):
 
 
 def _graph(points, normals, *, h, cutoff, method, orient, memory, max_cells, threads):
-    """Steps 1 to 4: the plan, and per chunk of ``points`` a delayed dict of its result's
-    arrays."""
+    """Steps 1 to 5: the plan, per chunk of ``points`` a delayed dict of its result's
+    arrays, and with estimated normals the delayed ``[agree, compared]`` of the overlaps
+    (None with given normals)."""
     options = dict(h=h, cutoff=cutoff, method=method, orient=orient, threads=threads)
     capacity = _mlscurv._capacity(_budget(memory))
     _mlscurv._reach(h, cutoff, method, normals is None)  # the options' errors before any work
@@ -212,7 +248,21 @@ def _graph(points, normals, *, h, cutoff, method, orient, memory, max_cells, thr
         )
         for c, (own, _) in enumerate(incidence)
     ]
-    return plan, chunks, offsets, names
+    overlap = None
+    if normals is None:
+        # The points tile t loads come from the chunks that feed it, and each is owned by one
+        # of those chunks' own tiles.
+        owners = {t: set() for t in tiles}
+        for own, near in incidence:
+            for t in near.tolist():
+                if t in owners:
+                    owners[t].update(own.tolist())
+        signs = {t: delayed(_own_signs)(r) for t, r in tiles.items()}
+        overlap = _tree_sum(
+            delayed(_overlap)(r, *[signs[u] for u in sorted(owners[t]) if u != t])
+            for t, r in tiles.items()
+        )
+    return plan, chunks, offsets, names, overlap
 
 
 def curvature(
@@ -253,10 +303,9 @@ def curvature(
     orient : str
         Orientation of estimated normals, per tile: ``"up"`` (default, as the binary's tiled
         run), ``"viewpoint:X,Y,Z"``, ``"mst"`` (outward from each tile, rarely what a cloud
-        cut in tiles needs) or ``"none"``. Each task sees only its own tile, so the tiles'
-        signs are not compared as the binary's tiled run compares them (it warns below 99 %
-        agreement in the overlaps): for a closed object, not a sheet seen from above, pass
-        ``normals`` or a viewpoint.
+        cut in tiles needs) or ``"none"``. Each tile orients its own normals: for a closed
+        object, not a sheet seen from above, pass ``normals`` or a viewpoint, and check
+        ``overlap_agreement`` in the result.
     memory : str or int
         Memory one tile task may use (``"300MiB"``, ``"2GiB"``, bytes), as ``--memory``.
     max_cells : int
@@ -270,6 +319,11 @@ def curvature(
         ``points`` (the input), ``normals``, ``k1``, ``k2``, ``mean``, ``gauss``, ``d1``,
         ``d2``, ``k1_sd`` and ``k2_sd`` (jet), ``status`` (int32), chunked like ``points``:
         the arrays of ``mlscurv.curvature``'s result. ``dask.compute(result)`` gives them.
+        With estimated normals also ``overlap_agreement`` (0-d, float64): the share of the
+        points two tiles load whose estimated normals' signs the two agree on (NaN with no
+        such point). Below ``MIN_OVERLAP_AGREEMENT`` (0.99) the tiles are not oriented one
+        way and the curvature's sign and size are wrong near the flips, which the binary's
+        tiled run warns about (terrain measures 0.999 to 1).
 
     Raises
     ------
@@ -301,11 +355,30 @@ def curvature(
                 "point"
             )
         normals = _as_cloud(normals, "normals", chunks=points.chunks).rechunk(points.chunks)
-    _, chunks, offsets, names = _graph(
+    _, chunks, offsets, names, overlap = _graph(
         points, normals, h=h, cutoff=cutoff, method=method, orient=orient, memory=memory,
         max_cells=max_cells, threads=threads,
     )
-    return _result(points, chunks, offsets, names)
+    out = _result(points, chunks, offsets, names)
+    if overlap is not None:
+        out["overlap_agreement"] = da.from_delayed(
+            delayed(_share)(overlap), shape=(), dtype=np.float64
+        )
+    return out
+
+
+def _overlap_warning(share: float, name: str) -> Optional[str]:
+    """The binary's warning about tiles that disagree on the normals' signs, or None."""
+    if not share < MIN_OVERLAP_AGREEMENT:
+        return None
+    return (
+        f"{name}: the estimated normals' signs differ between tiles at "
+        f"{100 * (1 - share):.1f}% of the overlap points (at most "
+        f"{100 * (1 - MIN_OVERLAP_AGREEMENT):.0f}% expected): the cloud is not oriented one "
+        "way across tiles (each tile orients its own), so the sign and size of the curvature "
+        "are wrong near the flips. Give orient=\"viewpoint:X,Y,Z\" for a scan from one "
+        "position, normals, or a larger memory to use fewer tiles"
+    )
 
 
 def _result(points, chunks, offsets, names):
@@ -373,6 +446,8 @@ def curvature_files(
         As for :func:`curvature`.
     compute : bool
         Write the files now and return their paths (default), or return the delayed writes.
+        Writing them now with estimated normals warns (``UserWarning``) when the tiles'
+        overlaps disagree on the normals' signs, as ``mlscurv curvature --memory`` does.
 
     Examples
     --------
@@ -423,7 +498,7 @@ def curvature_files(
                 for i in full
             ]
         )
-    _, chunks, offsets, names = _graph(
+    _, chunks, offsets, names, overlap = _graph(
         points, normals, h=h, cutoff=cutoff, method=method, orient=orient, memory=memory,
         max_cells=max_cells, threads=threads,
     )
@@ -437,5 +512,12 @@ def curvature_files(
         for i, (p, o) in enumerate(zip(paths, outs))
     ]
     if compute:
-        return list(dask.compute(*writes))
+        if overlap is None:
+            return list(dask.compute(*writes))
+        *written, pair = dask.compute(*writes, overlap)
+        name = paths[0] if len(paths) == 1 else f"{paths[0]} and {len(paths) - 1} more files"
+        said = _overlap_warning(_share(pair), name)
+        if said:
+            warnings.warn(said, stacklevel=2)
+        return written
     return writes
