@@ -2,6 +2,7 @@
 
 mod degenerate;
 mod estimation;
+mod forest;
 mod graph;
 mod orientation;
 mod spacing;
@@ -105,4 +106,12 @@ fn unoriented(k: usize) -> NormalsConfig {
         orientation: Orientation::None,
         ..NormalsConfig::default()
     }
+}
+
+/// An estimate with the unit normal `v` and a flat neighbourhood (full confidence).
+fn flat_estimate(v: Vector) -> Result<NormalEstimate, PointStatus> {
+    Ok(NormalEstimate {
+        normal: mls_core::UnitNormal::new(v).unwrap(),
+        variation: 0.0,
+    })
 }
