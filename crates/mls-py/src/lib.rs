@@ -348,5 +348,9 @@ fn _mlscurv(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<tiles::PyPlan>()?;
     m.add("STATUS", status_names(m.py())?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    m.add(
+        "_MIN_OVERLAP_AGREEMENT",
+        mls_cli::tiled::MIN_OVERLAP_AGREEMENT,
+    )?;
     Ok(())
 }

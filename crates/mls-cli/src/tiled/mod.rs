@@ -113,7 +113,7 @@ fn write_batch(budget: u64, record_in: u64) -> u64 {
 /// The least share of overlap points whose estimated normals have the same sign in both
 /// tiles before a warning. Airborne terrain measures 99.9–100 % (`tiled` tests); a closed
 /// cylinder, which `up` cannot orient, 56.6 %.
-const MIN_OVERLAP_AGREEMENT: f64 = 0.99;
+pub const MIN_OVERLAP_AGREEMENT: f64 = 0.99;
 
 /// Whether a run over `points` points fits in `budget` bytes without tiles.
 pub fn fits_in_memory(points: u64, budget: u64) -> bool {

@@ -44,8 +44,8 @@ MAX_CELLS = 1 << 16
 _VECTORS = ("normals", "d1", "d2")
 
 # Below this share of agreeing signs in the tiles' overlaps the estimated normals are not
-# oriented one way across tiles (the binary's tiled run warns at the same share).
-MIN_OVERLAP_AGREEMENT = 0.99
+# oriented one way across tiles: the binary's tiled run's threshold (0.99).
+MIN_OVERLAP_AGREEMENT = _mlscurv._MIN_OVERLAP_AGREEMENT
 
 
 def _columns(method: str) -> List[str]:
