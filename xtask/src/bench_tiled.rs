@@ -440,6 +440,7 @@ fn render(o: &Sizes, rows: &[Row], io: (f64, f64, f64), load_before: &str, elaps
         );
     }
     let _ = writeln!(md, "{}", io_line(o, io));
-    let _ = writeln!(md, "{END}");
+    // No newline after the marker: the document's own follows it, and each run would add one.
+    let _ = write!(md, "{END}");
     md
 }
