@@ -55,7 +55,7 @@ pub enum Method {
 pub enum Format {
     /// PLY (ASCII or binary).
     Ply,
-    /// Whitespace-separated columns (.xyz, .txt, .pts).
+    /// Columns separated by whitespace, commas or semicolons (.xyz, .txt, .pts).
     Xyz,
     /// Comma-separated columns with a header row.
     Csv,

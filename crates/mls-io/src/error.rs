@@ -80,8 +80,8 @@ pub enum ReadError {
     },
     /// The first data row of an XYZ/TXT/PTS file has fewer than 3 columns.
     #[error(
-        "{file}: line {line}: {found} column(s); expected at least 3 (x y z ...), \
-         whitespace-separated"
+        "{file}: line {line}: {found} column(s); expected at least 3 (x y z ...), separated \
+         by whitespace, commas or semicolons"
     )]
     UnsupportedColumnCount {
         /// The file.

@@ -1,5 +1,5 @@
 //! Point-cloud readers and writers for mls-curvature: PLY (ASCII and binary, either byte
-//! order), whitespace-separated XYZ/TXT/PTS, CSV with a header, LAS/LAZ (through the
+//! order), XYZ/TXT/PTS (whitespace, comma or semicolon separated), CSV with a header, LAS/LAZ (through the
 //! `las` crate; computed columns as LAS extra bytes on output), and E57 input (through the
 //! `e57` crate: every scan in world coordinates, with each scan's scanner position in
 //! [`Scans`]).
@@ -173,8 +173,8 @@ pub struct ReadOutcome {
 pub enum FileFormat {
     /// `.ply`: PLY, ASCII or binary.
     Ply,
-    /// `.xyz`, `.txt`, `.pts`: whitespace-separated columns, `#` comment lines (the writers put
-    /// the column names in one).
+    /// `.xyz`, `.txt`, `.pts`: columns separated by whitespace (or commas or semicolons, as the
+    /// first row has them), `#` comment lines (the writers put the column names in one).
     Xyz,
     /// `.csv`: comma-separated columns with a header row.
     Csv,

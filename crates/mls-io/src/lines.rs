@@ -79,6 +79,10 @@ pub(crate) fn parse_finite(token: &str) -> Result<f64, String> {
     match token.parse::<f64>() {
         Ok(value) if value.is_finite() => Ok(value),
         Ok(_) => Err(format!("non-finite value {}", crate::error::quoted(token))),
+        Err(_) if token.replacen(',', ".", 1).parse::<f64>().is_ok() => Err(format!(
+            "not a number: {} (a decimal comma? numbers are read with a decimal point: 1.5, not 1,5)",
+            crate::error::quoted(token)
+        )),
         Err(_) => Err(format!("not a number: {}", crate::error::quoted(token))),
     }
 }

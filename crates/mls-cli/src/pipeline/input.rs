@@ -105,7 +105,8 @@ pub fn read_outcome(
 }
 
 /// The format of data without a file name: PLY, LAS/LAZ or E57 by its magic word, else CSV if the first line
-/// that is not blank or a `#` comment has a comma or a semicolon (its header row), else XYZ.
+/// that is not blank or a `#` comment has a comma or a semicolon and is no row of values (so
+/// a header row), else XYZ (whose rows may be comma- or semicolon-separated too).
 fn sniff(bytes: &[u8]) -> FileFormat {
     if bytes.starts_with(b"ply") {
         return FileFormat::Ply;
@@ -121,8 +122,21 @@ fn sniff(bytes: &[u8]) -> FileFormat {
         .split(|&b| b == b'\n')
         .map(<[u8]>::trim_ascii)
         .find(|line| !line.is_empty() && !line.starts_with(b"#"));
+    // Values: the first three fields are numbers, as in a headerless XYZ row.
+    let values = |line: &[u8], c: u8| {
+        let fields: Vec<&[u8]> = line.split(|&b| b == c).take(3).collect();
+        fields.len() == 3
+            && fields
+                .iter()
+                .all(|f| std::str::from_utf8(f).is_ok_and(|f| f.trim().parse::<f64>().is_ok()))
+    };
     match first {
-        Some(line) if line.contains(&b',') || line.contains(&b';') => FileFormat::Csv,
+        Some(line)
+            if (line.contains(&b',') && !values(line, b','))
+                || (line.contains(&b';') && !values(line, b';')) =>
+        {
+            FileFormat::Csv
+        }
         _ => FileFormat::Xyz,
     }
 }

@@ -52,7 +52,17 @@ fn standard_input_in_every_format_gives_what_the_file_gives() {
                 .arg("--quiet"),
         );
     }
-    for input in [&xyz, &csv, &ply] {
+    // And as headerless comma-separated rows (an XYZ file, not a CSV one: no header).
+    let commas = dir.path().join("in-commas.xyz");
+    let text = fs::read_to_string(&xyz).unwrap();
+    let rows: Vec<String> = text
+        .lines()
+        .map(|l| l.split_ascii_whitespace().collect::<Vec<_>>().join(","))
+        .collect();
+    fs::write(&commas, rows.join("\n") + "\n").unwrap();
+    let whitespace = curvature_file(&xyz, &dir.path().join("whitespace.csv"), &[]);
+    assert!(curvature_file(&commas, &dir.path().join("commas.csv"), &[]) == whitespace);
+    for input in [&xyz, &csv, &ply, &commas] {
         let expected = curvature_file(input, &dir.path().join("expected.csv"), &[]);
         // Recognised from the data, and named.
         let format = input.extension().unwrap().to_str().unwrap();

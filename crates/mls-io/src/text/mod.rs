@@ -1,4 +1,5 @@
-//! Readers for the plain-text formats: whitespace-separated XYZ/TXT/PTS and CSV with a header.
+//! Readers for the plain-text formats: XYZ/TXT/PTS (columns separated by whitespace, commas or
+//! semicolons) and CSV with a header.
 
 use std::io::BufRead;
 
@@ -8,9 +9,10 @@ use crate::error::{ReadError, quoted};
 use crate::lines::{Lines, parse_finite};
 use crate::{CloudBuilder, PointCloud, ReadOutcome, SLOT_NAMES};
 
-/// Reads whitespace-separated rows of `x y z`, optionally followed by normals and other
-/// columns, with the default options; see [`read_xyz_with`]. What the reader noticed (columns
-/// ignored, columns 4–6 not taken as normals) is dropped: use [`read_xyz_with`] to show it.
+/// Reads rows of `x y z` (separated by whitespace, commas or semicolons), optionally followed
+/// by normals and other columns, with the default options; see [`read_xyz_with`]. What the
+/// reader noticed (columns ignored, columns 4–6 not taken as normals) is dropped: use
+/// [`read_xyz_with`] to show it.
 ///
 /// # Errors
 /// As [`read_xyz_with`].
@@ -112,7 +114,9 @@ impl UnitCheck {
     }
 }
 
-/// Reads whitespace-separated rows (`.xyz`, `.txt`, `.pts`) and reports what it noticed.
+/// Reads rows of columns (`.xyz`, `.txt`, `.pts`) and reports what it noticed. Columns are
+/// separated by whitespace, or by commas or semicolons where the first row of values or
+/// names is (CloudCompare's ASCII export writes either); every row takes that separator.
 ///
 /// Blank lines and lines whose first non-blank character is `#` are ignored. A first data
 /// row holding a single non-negative integer is the point-count line some scanners write at
@@ -150,10 +154,68 @@ pub fn read_xyz_with(
     read_xyz_slots(reader, name, options, &SLOT_NAMES)
 }
 
-/// The column names of a whitespace-separated row of names (line `line` of `file`); an error
-/// says `what` the row was taken for.
+/// How the columns of a plain-text row are separated: by whitespace (the XYZ convention), or
+/// by a comma or a semicolon, which CloudCompare's ASCII export offers too.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Separator {
+    Whitespace,
+    Char(char),
+}
+
+impl Separator {
+    /// The separator of `row`: a comma or a semicolon where splitting on it gives at least 3
+    /// fields whose first three are numbers (a row of values), or names, none a number and
+    /// none with a space inside (a row of names); else whitespace. Decimal commas
+    /// (`1,5 2,3 3,1`) split into fields that are not numbers, so such a row stays
+    /// whitespace-separated and is refused as not numbers; so does a whitespace-separated row
+    /// with commas in a text column (`1 2 3 a,b,c`).
+    fn of(row: &str) -> Self {
+        for c in [',', ';'] {
+            let fields: Vec<&str> = row.split(c).map(str::trim).collect();
+            if fields.len() < 3 {
+                continue;
+            }
+            let number = |f: &&str| f.parse::<f64>().is_ok();
+            let name = |f: &&str| !f.is_empty() && !f.contains(char::is_whitespace);
+            if fields[..3].iter().all(number)
+                || (fields.iter().all(name) && !fields.iter().any(number))
+            {
+                return Self::Char(c);
+            }
+        }
+        Self::Whitespace
+    }
+
+    /// The fields of `row`, trimmed of surrounding whitespace.
+    fn fields(self, row: &str) -> Fields<'_> {
+        match self {
+            Self::Whitespace => Fields::Whitespace(row.split_ascii_whitespace()),
+            Self::Char(c) => Fields::Char(row.split(c)),
+        }
+    }
+}
+
+/// The iterator of [`Separator::fields`].
+enum Fields<'a> {
+    Whitespace(std::str::SplitAsciiWhitespace<'a>),
+    Char(std::str::Split<'a, char>),
+}
+
+impl<'a> Iterator for Fields<'a> {
+    type Item = &'a str;
+
+    fn next(&mut self) -> Option<&'a str> {
+        match self {
+            Self::Whitespace(fields) => fields.next(),
+            Self::Char(fields) => fields.next().map(str::trim),
+        }
+    }
+}
+
+/// The column names of a row of names (line `line` of `file`), separated as
+/// [`Separator::of`] finds; an error says `what` the row was taken for.
 fn names_row(row: &str, file: &str, line: usize, what: &str) -> Result<ColumnNames, ReadError> {
-    let description = row.split_ascii_whitespace().collect::<Vec<_>>().join(",");
+    let description = Separator::of(row).fields(row).collect::<Vec<_>>().join(",");
     ColumnNames::parse(&description).map_err(|message| ReadError::Header {
         file: file.to_owned(),
         line,
@@ -181,6 +243,8 @@ pub(crate) fn read_xyz_slots(
     // The last `#` comment before the first row: the names when it has one per column
     // (mlscurv writes `# x y z nx ny nz k1 ...`).
     let mut comment: Option<(String, usize)> = None;
+    // Decided by each row until the first row of values, then kept for the file.
+    let mut separator = Separator::Whitespace;
     while let Some((line, text)) = lines.next_line(name)? {
         if let Some(rest) = text.trim_start().strip_prefix('#') {
             if roles.is_empty() {
@@ -195,11 +259,14 @@ pub(crate) fn read_xyz_slots(
             }
             continue;
         }
-        let found = text.split_ascii_whitespace().count();
+        if roles.is_empty() {
+            separator = Separator::of(text);
+        }
+        let found = separator.fields(text).count();
         if roles.is_empty() {
             let is_count_line = found == 1
-                && text
-                    .split_ascii_whitespace()
+                && separator
+                    .fields(text)
                     .next()
                     .is_some_and(|t| t.parse::<u64>().is_ok());
             let first = std::mem::replace(&mut first_row, false);
@@ -208,12 +275,9 @@ pub(crate) fn read_xyz_slots(
             }
             // A first row with no number among its tokens cannot be a point: it names the
             // columns, as a header row of other tools' text exports does without `//` or `#`.
-            if first
-                && found >= 3
-                && text
-                    .split_ascii_whitespace()
-                    .all(|t| t.parse::<f64>().is_err())
-            {
+            // Numbers written with a decimal comma are numbers here (refused below, saying so).
+            let number = |t: &str| t.replacen(',', ".", 1).parse::<f64>().is_ok();
+            if first && found >= 3 && !separator.fields(text).any(number) {
                 if options.columns.is_none() && named.is_none() {
                     let columns = names_row(text, name, line, "the first row names the columns")?;
                     named = Some((columns, line));
@@ -233,7 +297,7 @@ pub(crate) fn read_xyz_slots(
             };
             if options.columns.is_none() && named.is_none() {
                 named = comment.take().and_then(|(names, at)| {
-                    let tokens: Vec<&str> = names.split_ascii_whitespace().collect();
+                    let tokens: Vec<&str> = Separator::of(&names).fields(&names).collect();
                     let columns = ColumnNames::parse(&tokens.join(",")).ok()?;
                     (tokens.len() == found).then_some((columns, at))
                 });
@@ -293,7 +357,7 @@ pub(crate) fn read_xyz_slots(
         }
         let mut values = [0.0; 6];
         let mut candidate: Result<[f64; 3], String> = Ok([0.0; 3]);
-        for (column, (token, role)) in text.split_ascii_whitespace().zip(&roles).enumerate() {
+        for (column, (token, role)) in separator.fields(text).zip(&roles).enumerate() {
             match *role {
                 Role::Slot(slot) => {
                     let value = parse_finite(token).map_err(|message| ReadError::Ascii {

@@ -399,7 +399,8 @@ fn xyz_errors_name_line_and_column() {
             "# c\n1 2\n",
             &["line 2", "2 column(s)", "expected at least 3 (x y z"],
         ),
-        ("1,2,3\n", &["line 1", "1 column(s)"]),
+        // Two values, comma-separated: still fewer than 3 columns.
+        ("1,2\n", &["line 1", "1 column(s)"]),
         (
             "1 2 3\n4 x 6\n",
             &["line 2", "column 2 (y)", "not a number: \"x\""],

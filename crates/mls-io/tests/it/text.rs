@@ -156,6 +156,39 @@ fn xyz_column_names_from_a_first_row_of_names() {
     assert!(err.to_string().starts_with("late.xyz: line 2"), "{err}");
 }
 
+/// CloudCompare's ASCII export offers commas and semicolons as separators: the first row of
+/// values (or of names) says which, and every row is read with it. Decimal commas and a
+/// whitespace-separated row with commas in a text column are not taken for it.
+#[test]
+fn xyz_columns_separated_by_commas_or_semicolons() {
+    let text = "//X,Y,Z,Nx,Ny,Nz\n1,2,3,0,0,1\n4.5, 5 ,6,0,0,-1\n";
+    let cloud = read_xyz(text.as_bytes(), "cc.txt").unwrap();
+    assert_eq!(cloud.points, [[1.0, 2.0, 3.0], [4.5, 5.0, 6.0]]);
+    assert_eq!(cloud.normals, Some(vec![[0.0, 0.0, 1.0], [0.0, 0.0, -1.0]]));
+    let cloud = read_xyz("x;y;z;intensity\n1;2;3;7\n".as_bytes(), "semi.txt").unwrap();
+    assert_eq!(cloud.points, [[1.0, 2.0, 3.0]]);
+    let names: Vec<&str> = cloud.attributes.iter().map(|a| a.name.as_str()).collect();
+    assert_eq!(names, ["intensity"]);
+    let cloud = read_xyz("1, 2, 3\n4, 5, 6\n".as_bytes(), "spaced.xyz").unwrap();
+    assert_eq!(cloud.points, [[1.0, 2.0, 3.0], [4.0, 5.0, 6.0]]);
+    // Every row takes the first row's separator: a later whitespace row has one column.
+    let err = read_xyz("1,2,3\n4 5 6\n".as_bytes(), "mixed.xyz").unwrap_err();
+    assert!(
+        err.to_string().starts_with("mixed.xyz: line 2: 1 columns"),
+        "{err}"
+    );
+    // Commas in a text column of a whitespace-separated row are that column's.
+    let cloud = read_xyz("1 2 3 a,b,c\n4 5 6 d,e,f\n".as_bytes(), "tags.xyz").unwrap();
+    assert_eq!(cloud.points, [[1.0, 2.0, 3.0], [4.0, 5.0, 6.0]]);
+    // Decimal commas are refused, saying so.
+    let err = read_xyz("0,5 1,5 2,5\n".as_bytes(), "dec.txt").unwrap_err();
+    assert_eq!(
+        err.to_string(),
+        "dec.txt: line 1, column 1 (x): not a number: \"0,5\" (a decimal comma? numbers are \
+         read with a decimal point: 1.5, not 1,5)"
+    );
+}
+
 #[test]
 fn xyz_column_names_from_a_comment_that_names_every_column() {
     // As mlscurv writes XYZ: the names come back, so a result re-read keeps them.
