@@ -55,7 +55,7 @@ pub enum Method {
 pub enum Format {
     /// PLY (ASCII or binary).
     Ply,
-    /// Columns separated by whitespace, commas or semicolons (.xyz, .txt, .pts).
+    /// Columns separated by whitespace, commas or semicolons (.xyz, .txt, .pts, .asc).
     Xyz,
     /// Comma-separated columns with a header row.
     Csv,

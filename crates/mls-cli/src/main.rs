@@ -118,7 +118,7 @@ impl SurfaceArgs {
     }
 }
 
-const COLUMNS_HELP: &str = "Names of the columns of a text input (.xyz/.txt/.pts, or .csv \
+const COLUMNS_HELP: &str = "Names of the columns of a text input (.xyz/.txt/.pts/.asc, or .csv \
     instead of its header), e.g. `x,y,z,nx,ny,nz,intensity`: x, y, z and nx, ny, nz are the \
     geometry, `_` skips a column, other names are attributes carried to the output. Without \
     it, columns 4-6 of a headerless file are normals only if they are unit vectors on every \
@@ -127,7 +127,7 @@ const COLUMNS_HELP: &str = "Names of the columns of a text input (.xyz/.txt/.pts
 /// The output file, and the formats of the input and output.
 #[derive(Debug, Args)]
 struct OutputArgs {
-    /// Output file: .ply (binary little endian unless --ascii), .csv, .xyz/.txt/.pts, .las/.laz; `-` for
+    /// Output file: .ply (binary little endian unless --ascii), .csv, .xyz/.txt/.pts/.asc, .las/.laz; `-` for
     /// standard output (CSV unless --output-format).
     #[arg(short, long)]
     output: PathBuf,
@@ -161,7 +161,7 @@ struct FormatArgs {
 
 #[derive(Debug, Args)]
 struct CurvatureArgs {
-    /// Input point cloud: .ply, .xyz/.txt/.pts, .csv with a header, .las/.laz, or .e57 (every scan); `-` for
+    /// Input point cloud: .ply, .xyz/.txt/.pts/.asc, .csv with a header, .las/.laz, or .e57 (every scan); `-` for
     /// standard input.
     input: PathBuf,
     #[command(flatten)]
@@ -212,7 +212,7 @@ struct EvalArgs {
     /// Kernel cutoff radius in units of h, or `none`.
     #[arg(long, value_parser = parse_cutoff, default_value = "5", allow_negative_numbers = true)]
     cutoff: mls_core::Cutoff,
-    /// Output file (.csv, .ply, .xyz/.txt/.pts, .las/.laz, by extension); standard output (CSV unless
+    /// Output file (.csv, .ply, .xyz/.txt/.pts/.asc, .las/.laz, by extension); standard output (CSV unless
     /// --output-format) when absent or `-`.
     #[arg(short, long)]
     output: Option<PathBuf>,

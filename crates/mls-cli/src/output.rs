@@ -146,7 +146,7 @@ pub fn check_output(
         ),
         (Some(format), _) | (None, Some(format)) => format,
         (None, None) => bail!(
-            "{name}: {}; expected .ply, .csv, .xyz, .txt, .pts, .las or .laz, or name the format with --output-format ply|xyz|csv|las|laz",
+            "{name}: {}; expected .ply, .csv, .xyz, .txt, .pts, .asc, .las or .laz, or name the format with --output-format ply|xyz|csv|las|laz",
             match path.extension() {
                 Some(e) => format!("unknown extension \".{}\"", e.to_string_lossy()),
                 None => "no file extension".to_owned(),

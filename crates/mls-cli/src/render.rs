@@ -14,7 +14,7 @@ use mls_render::{Category, Cloud, ColourScale, Legend, Panel, Up, View};
 #[derive(Debug, Args)]
 pub struct RenderArgs {
     /// A result of `curvature`, `eval`, `project` or `normals`, or any cloud with the field's
-    /// column: .ply, .xyz/.txt/.pts with named columns, .csv, .las/.laz.
+    /// column: .ply, .xyz/.txt/.pts/.asc with named columns, .csv, .las/.laz.
     input: PathBuf,
     /// The picture to write (.png).
     #[arg(short, long)]

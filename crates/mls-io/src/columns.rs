@@ -110,7 +110,7 @@ impl fmt::Display for ColumnNames {
 /// How to read a file.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct ReadOptions {
-    /// Names for the columns of a text file (`.xyz`, `.txt`, `.pts`, `.csv`), replacing the
+    /// Names for the columns of a text file (`.xyz`, `.txt`, `.pts`, `.asc`, `.csv`), replacing the
     /// column rule of headerless files and the header row's names of CSV (the header row is
     /// still skipped). `None` reads by the file's own rule. Not for PLY, whose header names
     /// its properties.

@@ -24,21 +24,23 @@ pub enum ReadError {
     },
     /// The path names a directory, not a file.
     #[error(
-        "{file}: is a directory; expected a point-cloud file (.ply, .xyz, .txt, .pts, .csv, .las, .laz or .e57)"
+        "{file}: is a directory; expected a point-cloud file (.ply, .xyz, .txt, .pts, .asc, .csv, .las, .laz or .e57)"
     )]
     IsADirectory {
         /// The path.
         file: String,
     },
     /// The file name has no extension, so its format is unknown.
-    #[error("{file}: no file extension; expected .ply, .xyz, .txt, .pts, .csv, .las, .laz or .e57")]
+    #[error(
+        "{file}: no file extension; expected .ply, .xyz, .txt, .pts, .asc, .csv, .las, .laz or .e57"
+    )]
     NoExtension {
         /// The file.
         file: String,
     },
     /// The file name has an extension that names no supported format.
     #[error(
-        "{file}: unknown extension \".{extension}\"; expected .ply, .xyz, .txt, .pts, .csv, .las, .laz or .e57"
+        "{file}: unknown extension \".{extension}\"; expected .ply, .xyz, .txt, .pts, .asc, .csv, .las, .laz or .e57"
     )]
     UnknownExtension {
         /// The file.
@@ -91,6 +93,17 @@ pub enum ReadError {
         /// Its number of columns.
         found: usize,
     },
+    /// An XYZ/TXT/ASC file that begins like an ESRI ASCII grid (`ncols`), a raster.
+    #[error(
+        "{file}: line {line}: \"ncols\" begins an ESRI ASCII grid, a raster of heights, not a \
+         point cloud; convert it to x y z rows first (for example gdal_translate -of XYZ)"
+    )]
+    RasterGrid {
+        /// The file.
+        file: String,
+        /// The `ncols` line.
+        line: usize,
+    },
     /// The column names given in [`ReadOptions::columns`](crate::ReadOptions::columns)
     /// (`--columns`) are not as many as the columns of the first data row (XYZ) or the
     /// header (CSV).
@@ -109,7 +122,7 @@ pub enum ReadError {
     },
     /// Column names were given for a PLY or LAS/LAZ file, whose header names its fields.
     #[error(
-        "{file}: --columns applies to text files (.xyz, .txt, .pts, .csv); a PLY, LAS or E57 \
+        "{file}: --columns applies to text files (.xyz, .txt, .pts, .asc, .csv); a PLY, LAS or E57 \
          header names its fields"
     )]
     ColumnsForPly {
@@ -208,14 +221,14 @@ pub enum WriteError {
         file: String,
     },
     /// The destination has no extension, so the output format is unknown.
-    #[error("{file}: no file extension; expected .ply, .csv, .xyz, .txt, .pts, .las or .laz")]
+    #[error("{file}: no file extension; expected .ply, .csv, .xyz, .txt, .pts, .asc, .las or .laz")]
     NoExtension {
         /// The destination.
         file: String,
     },
     /// The destination's extension names no supported output format.
     #[error(
-        "{file}: unknown extension \".{extension}\"; expected .ply, .csv, .xyz, .txt, .pts, .las or .laz"
+        "{file}: unknown extension \".{extension}\"; expected .ply, .csv, .xyz, .txt, .pts, .asc, .las or .laz"
     )]
     UnknownExtension {
         /// The destination.

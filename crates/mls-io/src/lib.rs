@@ -173,8 +173,9 @@ pub struct ReadOutcome {
 pub enum FileFormat {
     /// `.ply`: PLY, ASCII or binary.
     Ply,
-    /// `.xyz`, `.txt`, `.pts`: columns separated by whitespace (or commas or semicolons, as the
-    /// first row has them), `#` comment lines (the writers put the column names in one).
+    /// `.xyz`, `.txt`, `.pts`, `.asc` (CloudCompare's ASCII cloud): columns separated by
+    /// whitespace (or commas or semicolons, as the first row has them), `#` comment lines (the
+    /// writers put the column names in one).
     Xyz,
     /// `.csv`: comma-separated columns with a header row.
     Csv,
@@ -191,7 +192,7 @@ impl FileFormat {
     pub fn from_extension(extension: &str) -> Option<Self> {
         match extension.to_ascii_lowercase().as_str() {
             "ply" => Some(Self::Ply),
-            "xyz" | "txt" | "pts" => Some(Self::Xyz),
+            "xyz" | "txt" | "pts" | "asc" => Some(Self::Xyz),
             "csv" => Some(Self::Csv),
             "las" => Some(Self::Las),
             "laz" => Some(Self::Laz),
@@ -213,7 +214,7 @@ fn detect_format(path: &Path) -> Result<FileFormat, Option<String>> {
 }
 
 /// Reads a point cloud, choosing the reader by the file's extension (case-insensitive):
-/// `.ply` ([`read_ply`]), `.xyz`, `.txt`, `.pts` ([`read_xyz`]), `.csv` ([`read_csv`]), or
+/// `.ply` ([`read_ply`]), `.xyz`, `.txt`, `.pts`, `.asc` ([`read_xyz`]), `.csv` ([`read_csv`]), or
 /// `.las`, `.laz` ([`ReadError::Las`] names what is wrong), or `.e57` ([`ReadError::E57`]).
 /// The readers' notes are dropped; [`read_point_cloud_with`] returns them.
 ///

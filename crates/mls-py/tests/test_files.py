@@ -17,7 +17,7 @@ def cloud():
     return torus(500, seed=4)
 
 
-@pytest.mark.parametrize("ext", ["ply", "csv", "xyz", "txt", "pts"])
+@pytest.mark.parametrize("ext", ["ply", "csv", "xyz", "txt", "pts", "asc"])
 def test_round_trip_is_exact(tmp_path, cloud, ext):
     points, normals = cloud
     path = tmp_path / f"cloud.{ext}"

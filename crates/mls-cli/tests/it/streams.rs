@@ -130,25 +130,29 @@ fn other_extensions_are_read_with_input_format_and_refused_without() {
     let dir = tempfile::tempdir().unwrap();
     let xyz = dir.path().join("in.xyz");
     write_unit_sphere(&xyz, N);
-    let asc = dir.path().join("scan.asc");
-    fs::copy(&xyz, &asc).unwrap();
+    let other = dir.path().join("scan.dat");
+    fs::copy(&xyz, &other).unwrap();
     let expected = curvature_file(&xyz, &dir.path().join("a.csv"), &[]);
-    let got = curvature_file(&asc, &dir.path().join("b.csv"), &["--input-format", "xyz"]);
+    let got = curvature_file(
+        &other,
+        &dir.path().join("b.csv"),
+        &["--input-format", "xyz"],
+    );
     assert!(got == expected);
     let r = run(mlscurv()
         .arg("curvature")
-        .arg(&asc)
+        .arg(&other)
         .arg("-o")
         .arg(dir.path().join("c.csv")));
     assert_one_line_error(
         &r,
-        &asc.display().to_string(),
-        &["\".asc\"", "--input-format"],
+        &other.display().to_string(),
+        &["\".dat\"", "--input-format"],
     );
     let r = run_ok(
         mlscurv()
             .arg("info")
-            .arg(&asc)
+            .arg(&other)
             .args(["--input-format", "xyz"]),
     );
     assert!(r.stdout.contains("points          500"), "{}", r.stdout);

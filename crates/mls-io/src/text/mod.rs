@@ -114,7 +114,7 @@ impl UnitCheck {
     }
 }
 
-/// Reads rows of columns (`.xyz`, `.txt`, `.pts`) and reports what it noticed. Columns are
+/// Reads rows of columns (`.xyz`, `.txt`, `.pts`, `.asc`) and reports what it noticed. Columns are
 /// separated by whitespace, or by commas or semicolons where the first row of values or
 /// names is (CloudCompare's ASCII export writes either); every row takes that separator.
 ///
@@ -142,7 +142,8 @@ impl UnitCheck {
 /// with it.
 ///
 /// # Errors
-/// [`ReadError::UnsupportedColumnCount`] for fewer than 3 columns,
+/// [`ReadError::UnsupportedColumnCount`] for fewer than 3 columns, [`ReadError::RasterGrid`]
+/// for an ESRI ASCII grid,
 /// [`ReadError::ColumnsMismatch`] when the named columns do not match the file,
 /// [`ReadError::ColumnCount`], [`ReadError::Ascii`] for an `x y z` (or named normal) value
 /// that is not a finite number or for text that is not UTF-8, and [`ReadError::Io`].
@@ -283,6 +284,20 @@ pub(crate) fn read_xyz_slots(
                     named = Some((columns, line));
                 }
                 continue;
+            }
+            // CloudCompare's `.asc` is a point cloud; ESRI's `.asc` is a height raster,
+            // which begins `ncols N`.
+            let starts = |word: &str| {
+                separator
+                    .fields(text)
+                    .next()
+                    .is_some_and(|t| t.eq_ignore_ascii_case(word))
+            };
+            if first && starts("ncols") {
+                return Err(ReadError::RasterGrid {
+                    file: name.to_owned(),
+                    line,
+                });
             }
             if found < 3 {
                 return Err(ReadError::UnsupportedColumnCount {

@@ -167,7 +167,7 @@ pub struct WriteOptions<'a> {
 }
 
 /// Writes `columns` to `path` in the format its extension names (case-insensitive): `.ply`
-/// (in `ply_format`), `.csv`, `.xyz`, `.txt`, `.pts` (space-separated after a `#` line of
+/// (in `ply_format`), `.csv`, `.xyz`, `.txt`, `.pts`, `.asc` (space-separated after a `#` line of
 /// column names), or `.las`, `.laz` ([`write_las`]).
 ///
 /// For points and normals only, pass [`PointCloud::columns`](crate::PointCloud::columns).

@@ -285,6 +285,7 @@ fn files_round_trip_through_every_extension() {
         ("d.xyz", PlyFormat::default()),
         ("e.txt", PlyFormat::default()),
         ("f.pts", PlyFormat::default()),
+        ("g.ASC", PlyFormat::default()),
     ] {
         let path = dir.path().join(name);
         // Text formats without a header are written with x y z nx ny nz only, to be read back

@@ -33,6 +33,27 @@ fn pts_point_count_line_is_skipped_once() {
     assert!(read_xyz("2\n3\n1 2 3\n".as_bytes(), "a.pts").is_err());
 }
 
+/// ESRI's `.asc` grids share CloudCompare's extension: a raster is refused as one, by its
+/// first keyword (any case), not read as a short row.
+#[test]
+fn an_esri_ascii_grid_is_refused_as_a_raster() {
+    let grid = "ncols 3\nnrows 2\nxllcorner 0\nyllcorner 0\ncellsize 1\n1 2 3\n4 5 6\n";
+    for text in [grid.to_owned(), format!("# dem\n{}", grid.to_uppercase())] {
+        let err = read_xyz(text.as_bytes(), "dem.asc").unwrap_err();
+        assert!(matches!(err, ReadError::RasterGrid { .. }), "{err:?}");
+        let message = err.to_string();
+        let line = if text.starts_with('#') { 2 } else { 1 };
+        assert!(
+            message.starts_with(&format!("dem.asc: line {line}: ")),
+            "{message}"
+        );
+        assert!(message.contains("ESRI ASCII grid"), "{message}");
+    }
+    let cloud = read_xyz("1 2 3\n".as_bytes(), "a.asc").unwrap();
+    assert_eq!(cloud.points, [[1.0, 2.0, 3.0]]);
+    assert_eq!(FileFormat::from_extension("ASC"), Some(FileFormat::Xyz));
+}
+
 #[test]
 fn empty_text_files_are_empty_clouds() {
     assert!(read_xyz("".as_bytes(), "a.xyz").unwrap().is_empty());
@@ -476,7 +497,7 @@ fn named_columns_apply_with_a_named_format_and_to_streams() {
         plain.notes
     );
     let dir = tempfile::tempdir().unwrap();
-    let path = dir.path().join("scan.asc");
+    let path = dir.path().join("scan.dat");
     std::fs::write(&path, text).unwrap();
     let from_file = read_point_cloud_as_with(&path, FileFormat::Xyz, &options).unwrap();
     assert_eq!(from_file, from_stream);
