@@ -209,7 +209,7 @@ impl MlsSurface {
         let Some(radius) = self.kernel.support_radius() else {
             return self.map_queries(queries, par, |ev, q| ev.curvature_at(q));
         };
-        self.map_clusters(queries, par, |ev, cluster| {
+        self.map_clusters(queries, WIDE_CLUSTER, par, |ev, cluster| {
             ev.curvature_of_cluster(queries, cluster, radius)
         })
     }
@@ -238,7 +238,7 @@ impl MlsSurface {
     /// does, was measured and did not pay here: filtering each line search's support from the
     /// cluster's candidates cost as many instructions as the searches it saved.)
     pub fn project_points(&self, queries: &[Point], par: Parallelism) -> Vec<PointResult> {
-        self.map_clusters(queries, par, |ev, cluster| {
+        self.map_clusters(queries, CLUSTER, par, |ev, cluster| {
             cluster
                 .iter()
                 .map(|&i| (i, ev.project(&queries[i])))
@@ -254,7 +254,7 @@ impl MlsSurface {
         min_weight_sum: f64,
         par: Parallelism,
     ) -> Vec<Result<Option<SurfacePoint>, PointStatus>> {
-        self.map_clusters(queries, par, |ev, cluster| {
+        self.map_clusters(queries, CLUSTER, par, |ev, cluster| {
             cluster
                 .iter()
                 .map(|&i| (i, ev.project_resolved(&queries[i], min_weight_sum)))
@@ -262,10 +262,10 @@ impl MlsSurface {
         })
     }
 
-    /// Runs `run` on clusters of [`CLUSTER`] queries (indices into `queries`) taken in Morton
+    /// Runs `run` on clusters of `size` queries (indices into `queries`) taken in Morton
     /// order, so that a cluster's queries are close together and consecutive clusters touch
     /// neighbouring samples, and returns the results in query order.
-    fn map_clusters<T, F>(&self, queries: &[Point], par: Parallelism, run: F) -> Vec<T>
+    fn map_clusters<T, F>(&self, queries: &[Point], size: usize, par: Parallelism, run: F) -> Vec<T>
     where
         T: Copy + Send + Sync,
         F: Fn(&mut Evaluator<'_>, &[usize]) -> Vec<(usize, T)> + Sync,
@@ -276,33 +276,36 @@ impl MlsSurface {
             .fold(0.0f64, |m, q| m.max((q - self.index.origin).coords.amax()));
         let key = |i: &usize| morton_key(&(queries[*i] - self.index.origin), half_extent);
         let mut order: Vec<usize> = (0..queries.len()).collect();
-        let pairs: Vec<(usize, T)> = match par {
+        // One vector of results per cluster, the clusters in `order`: collected by index, so
+        // that no result is copied on the way (they are several hundred bytes each).
+        let clusters: Vec<Vec<(usize, T)>> = match par {
             Parallelism::Sequential => {
                 order.sort_by_cached_key(key);
                 let mut ev = self.evaluator();
-                order
-                    .chunks(CLUSTER)
-                    .flat_map(|c| run(&mut ev, c))
-                    .collect()
+                order.chunks(size).map(|c| run(&mut ev, c)).collect()
             }
             Parallelism::Rayon => {
                 order.par_sort_by_cached_key(key);
                 order
-                    .par_chunks(CLUSTER)
+                    .par_chunks(size)
                     .map_init(|| self.evaluator(), |ev, c| run(ev, c))
-                    .flatten_iter()
                     .collect()
             }
         };
-        // `pairs` follows `order`; each result is gathered into query order (in parallel: at a
-        // million results of several hundred bytes, a sequential scatter was a few per cent of
-        // the whole run).
-        debug_assert!(pairs.iter().zip(&order).all(|((i, _), j)| i == j));
+        // Each result is gathered into query order (in parallel: at a million results, a
+        // sequential scatter was a few per cent of the whole run).
+        debug_assert!(
+            clusters
+                .iter()
+                .flatten()
+                .zip(&order)
+                .all(|((i, _), j)| i == j)
+        );
         let mut rank = vec![0; queries.len()];
         for (k, &i) in order.iter().enumerate() {
             rank[i] = k;
         }
-        let gather = |i: usize| pairs[rank[i]].1;
+        let gather = |i: usize| clusters[rank[i] / size][rank[i] % size].1;
         par.map(queries.len(), 1, gather)
     }
 
@@ -391,3 +394,7 @@ pub(crate) struct Hits {
 /// Queries sharing one neighbour search in [`MlsSurface::curvature_at_points`]; also the unit
 /// of work of [`MlsSurface::project_points`].
 const CLUSTER: usize = 16;
+
+/// Queries sharing one neighbour search in [`MlsSurface::curvature_at_points`] where they lie
+/// close enough, each group of [`CLUSTER`] then filtering the candidates again.
+const WIDE_CLUSTER: usize = 64;

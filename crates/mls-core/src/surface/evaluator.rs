@@ -3,7 +3,7 @@
 //! curvature at a point, the projection onto the surface, the polynomial jet). It holds the
 //! buffers they reuse, so that after warm-up no query allocates.
 
-use super::{Hits, MlsSurface, PointResult, SurfacePoint};
+use super::{CLUSTER, Hits, MlsSurface, PointResult, SurfacePoint};
 use crate::curvature::curvature;
 use crate::field::{FieldScratch, Implicit, Sample, evaluate, evaluate_loaded};
 use crate::jet::{self, JetConfig, JetPoint};
@@ -24,6 +24,7 @@ impl MlsSurface {
             surface: self,
             support: Vec::new(),
             candidates: Vec::new(),
+            wide: Vec::new(),
             hits: Hits::default(),
             scratch: FieldScratch::default(),
             line: Vec::new(),
@@ -40,6 +41,8 @@ pub struct Evaluator<'a> {
     support: Vec<Sample>,
     /// Samples near a cluster of queries, filtered per query into `support`.
     candidates: Vec<Sample>,
+    /// Samples near a cluster of several groups, filtered per group into `candidates`.
+    wide: Vec<Sample>,
     /// The neighbour search's hits, put into storage order.
     hits: Hits,
     scratch: FieldScratch,
@@ -306,52 +309,112 @@ impl Evaluator<'_> {
     }
 
     /// Curvature at the world-space queries `queries[i]` for `i` in `cluster`: one neighbour
-    /// search around the cluster, then each query's support filtered from it. Clusters spread
-    /// wider than the support radius are split in halves.
+    /// search around the cluster, then each query's support filtered from it.
+    ///
+    /// A cluster of more than [`CLUSTER`] queries spread less than the support radius is
+    /// searched once and its candidates filtered again for each group of [`CLUSTER`]: the
+    /// tree's search costs several times a linear filter of the same samples. Groups spread
+    /// wider than a quarter of the radius are split in halves (each query then filters fewer
+    /// candidates).
     pub(super) fn curvature_of_cluster(
         &mut self,
         queries: &[Point],
         cluster: &[usize],
         radius: f64,
     ) -> Vec<(usize, PointResult)> {
-        let origin = self.surface.index.origin;
-        let finite = |q: &Point| q.iter().all(|c| c.is_finite());
-        let (sum, count) = cluster
-            .iter()
-            .map(|&i| &queries[i])
-            .filter(|q| finite(q))
-            .fold((Vector::zeros(), 0usize), |(s, n), q| {
-                (s + (q - origin).coords, n + 1)
-            });
-        let centre = Point::from(sum / count.max(1) as f64);
-        let spread = cluster
-            .iter()
-            .map(|&i| &queries[i])
-            .filter(|q| finite(q))
-            .fold(0.0f64, |m, q| m.max(((q - origin) - centre).norm()));
-        if count == 0 {
+        let Some((centre, spread)) = self.extent(queries, cluster) else {
             return cluster
                 .iter()
                 .map(|&i| (i, self.curvature_at(&queries[i])))
                 .collect();
+        };
+        if cluster.len() <= CLUSTER {
+            return self.curvature_of_group(queries, cluster, radius, false);
         }
-        if spread > radius * 0.25 {
-            // A jump of the Morton curve: each half is compact again (a single query has
-            // spread 0).
-            let (left, right) = cluster.split_at(cluster.len() / 2);
+        if spread > radius {
+            // Split at a multiple of CLUSTER, so that the groups stay whole.
+            let mid = cluster.len().div_ceil(2 * CLUSTER) * CLUSTER;
+            let (left, right) = cluster.split_at(mid);
             let mut out = self.curvature_of_cluster(queries, left, radius);
             out.extend(self.curvature_of_cluster(queries, right, radius));
             return out;
         }
+        self.wide.clear();
+        let s = self.surface;
+        s.index.samples_within_ordered(
+            &centre,
+            Self::reach(radius, spread),
+            &mut self.hits,
+            &mut self.wide,
+        );
+        cluster
+            .chunks(CLUSTER)
+            .flat_map(|c| self.curvature_of_group(queries, c, radius, true))
+            .collect()
+    }
+
+    /// The centre (internal frame) of a cluster's finite queries and their largest distance
+    /// from it; `None` when none is finite.
+    fn extent(&self, queries: &[Point], cluster: &[usize]) -> Option<(Point, f64)> {
+        let origin = self.surface.index.origin;
+        let finite = |q: &&Point| q.iter().all(|c| c.is_finite());
+        let points = || cluster.iter().map(|&i| &queries[i]).filter(finite);
+        let (sum, count) = points().fold((Vector::zeros(), 0usize), |(s, n), q| {
+            (s + (q - origin).coords, n + 1)
+        });
+        if count == 0 {
+            return None;
+        }
+        let centre = Point::from(sum / count as f64);
+        let spread = points().fold(0.0f64, |m, q| m.max(((q - origin) - centre).norm()));
+        Some((centre, spread))
+    }
+
+    /// How far from a cluster's centre its candidates are gathered. The margin keeps every
+    /// sample within `radius` of a query among them despite rounding in `spread` and in the
+    /// distances: a query's support is then exactly its own, in storage order, whatever
+    /// cluster it falls in (so results do not depend on how the queries are grouped or
+    /// chunked).
+    fn reach(radius: f64, spread: f64) -> f64 {
+        (radius + spread) * (1.0 + 1e-9)
+    }
+
+    /// [`Self::curvature_of_cluster`] for a group of at most [`CLUSTER`] queries, its
+    /// candidates searched in the tree or, with `from_wide`, filtered from `self.wide` (which
+    /// then holds, in storage order, every sample within reach of the group's queries).
+    fn curvature_of_group(
+        &mut self,
+        queries: &[Point],
+        cluster: &[usize],
+        radius: f64,
+        from_wide: bool,
+    ) -> Vec<(usize, PointResult)> {
+        let Some((centre, spread)) = self.extent(queries, cluster) else {
+            return cluster
+                .iter()
+                .map(|&i| (i, self.curvature_at(&queries[i])))
+                .collect();
+        };
+        if spread > radius * 0.25 {
+            // A jump of the Morton curve: each half is compact again (a single query has
+            // spread 0).
+            let (left, right) = cluster.split_at(cluster.len() / 2);
+            let mut out = self.curvature_of_group(queries, left, radius, from_wide);
+            out.extend(self.curvature_of_group(queries, right, radius, from_wide));
+            return out;
+        }
         self.candidates.clear();
         let s = self.surface;
-        // The margin keeps every sample within `radius` of a query among the candidates
-        // despite rounding in `spread` and in the tree's distances: a query's support is then
-        // exactly its own, in storage order, whatever cluster it falls in (so results do not
-        // depend on how the queries are grouped or chunked).
-        let reach = (radius + spread) * (1.0 + 1e-9);
-        s.index
-            .samples_within_ordered(&centre, reach, &mut self.hits, &mut self.candidates);
+        let reach = Self::reach(radius, spread);
+        if from_wide {
+            let reach2 = reach * reach;
+            let near = |q: &&Sample| (q.point - centre).norm_squared() <= reach2;
+            self.candidates.extend(self.wide.iter().filter(near));
+        } else {
+            s.index
+                .samples_within_ordered(&centre, reach, &mut self.hits, &mut self.candidates);
+        }
+        let origin = s.index.origin;
         let r2 = radius * radius;
         let inv_h2 = s.kernel.inv_h2();
         let min_neighbours = s.config.min_neighbours;
@@ -359,7 +422,7 @@ impl Evaluator<'_> {
             .iter()
             .map(|&i| {
                 let x = &queries[i];
-                if !finite(x) {
+                if !x.iter().all(|c| c.is_finite()) {
                     return (i, Err(PointStatus::InvalidQuery));
                 }
                 let local = x - origin;
