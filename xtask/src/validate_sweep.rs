@@ -1,7 +1,6 @@
 //! One case of the differential sweep: a random patch, its production results through the
 //! entry points users run, and the witnesses of mls-ad on supports they filter themselves.
 
-use std::ops::Range;
 use std::sync::OnceLock;
 
 use mls_core::normals::{
@@ -212,7 +211,7 @@ pub(crate) fn streamed<R: Clone + Send + std::fmt::Debug>(
     rng: &mut ChaCha8Rng,
     n: usize,
     (stream_name, whole_name): (&str, &str),
-    stream: impl FnOnce(Parallelism, usize, &mut dyn FnMut(Range<usize>, &[R])) + Send,
+    stream: impl FnOnce(Parallelism, usize, &mut dyn FnMut(&[usize], &[R])) + Send,
     whole: impl FnOnce(Parallelism) -> Vec<R> + Send,
 ) -> Vec<R> {
     let variant = Variant::random(rng);
@@ -236,19 +235,27 @@ pub(crate) fn random_chunk(rng: &mut ChaCha8Rng, n: usize) -> usize {
     [1, 7, n.max(1), DEFAULT_CHUNK][rng.random_range(0..4)]
 }
 
-/// The results a stream delivers to its sink, or `None` unless its ranges tile `0..n` in
-/// order, each with as many results as indices.
+/// The results a stream delivers to its sink, put at their queries' indices, or `None` unless
+/// every index of `0..n` comes exactly once, each with one result.
 pub(crate) fn collect_stream<R: Clone>(
     n: usize,
-    stream: impl FnOnce(&mut dyn FnMut(Range<usize>, &[R])),
+    stream: impl FnOnce(&mut dyn FnMut(&[usize], &[R])),
 ) -> Option<Vec<R>> {
-    let mut out = Vec::with_capacity(n);
+    let mut out: Vec<Option<R>> = vec![None; n];
     let mut tiled = true;
-    stream(&mut |range: Range<usize>, results: &[R]| {
-        tiled &= range.start == out.len() && range.len() == results.len();
-        out.extend_from_slice(results);
+    stream(&mut |indices: &[usize], results: &[R]| {
+        tiled &= indices.len() == results.len();
+        for (&i, r) in indices.iter().zip(results) {
+            match out.get_mut(i) {
+                Some(slot @ None) => *slot = Some(r.clone()),
+                _ => tiled = false,
+            }
+        }
     });
-    (tiled && out.len() == n).then_some(out)
+    if !tiled {
+        return None;
+    }
+    out.into_iter().collect()
 }
 
 /// 1 unless the streamed results are bitwise those of the unchunked call. `Debug` prints each

@@ -1,8 +1,6 @@
 //! Evaluation of a built surface at every point, streamed chunk by chunk, into the output
 //! columns of `mlscurv curvature`, `project` and `normals`.
 
-use std::ops::Range;
-
 use mls_core::{
     AdaptiveSurface, Curvature, JetConfig, JetPoint, Location, MlsSurface, NormalData, Parallelism,
     Point, PointResult, PointStatus, Vector,
@@ -46,8 +44,9 @@ pub fn curvature_label(at: At) -> &'static str {
     }
 }
 
-/// The columns of `mlscurv curvature` besides the position, filled result by result so that
-/// the full per-point results (about 600 bytes each) are held for one chunk at a time only.
+/// The columns of `mlscurv curvature` besides the position, filled result by result (in the
+/// streams' order, each at its query's row) so that the full per-point results (about 600
+/// bytes each) are held for one chunk at a time only.
 #[derive(Debug)]
 pub struct CurvatureColumns {
     pub normal: Vec<[f64; 3]>,
@@ -75,53 +74,55 @@ pub struct CurvatureColumns {
 }
 
 impl CurvatureColumns {
-    pub fn with_capacity(n: usize, options: &CurvatureOptions) -> Self {
+    /// Columns of `n` rows, NaN until [`Self::set`] (the streams set every row once).
+    pub fn new(n: usize, options: &CurvatureOptions) -> Self {
+        let adaptive = options.adaptive;
+        let jet = options.method == Method::Jet;
+        let optional = |wanted: bool| {
+            if wanted {
+                vec![f64::NAN; n]
+            } else {
+                Vec::new()
+            }
+        };
         Self {
-            normal: Vec::with_capacity(n),
-            k1: Vec::with_capacity(n),
-            k2: Vec::with_capacity(n),
-            mean: Vec::with_capacity(n),
-            gauss: Vec::with_capacity(n),
-            d1: Vec::with_capacity(n),
-            d2: Vec::with_capacity(n),
-            status: Vec::with_capacity(n),
-            h: Vec::new(),
-            noise: Vec::new(),
-            k1_sd: Vec::new(),
-            k2_sd: Vec::new(),
-            projected: (options.at == At::Projected).then(|| Vec::with_capacity(n)),
-            adaptive: options.adaptive,
-            jet: options.method == Method::Jet,
+            normal: vec![NAN3; n],
+            k1: vec![f64::NAN; n],
+            k2: vec![f64::NAN; n],
+            mean: vec![f64::NAN; n],
+            gauss: vec![f64::NAN; n],
+            d1: vec![NAN3; n],
+            d2: vec![NAN3; n],
+            status: vec![0; n],
+            h: optional(adaptive),
+            noise: optional(adaptive),
+            k1_sd: optional(jet),
+            k2_sd: optional(jet),
+            projected: (options.at == At::Projected).then(|| vec![NAN3; n]),
+            adaptive,
+            jet,
         }
     }
 
-    /// Appends the row of `r`, and the point evaluated at (the projection for `--at
-    /// projected`; a failed point keeps its input position `query`).
-    fn push(&mut self, r: Result<(Point, Curvature), PointStatus>, query: &Point) {
-        self.status.push(status_code(&r));
+    /// Sets row `i` from `r`, and the point evaluated at (the projection for `--at
+    /// projected`; a failed point keeps its input position `query` and its NaNs).
+    fn set(&mut self, i: usize, r: Result<(Point, Curvature), PointStatus>, query: &Point) {
+        self.status[i] = status_code(&r);
         let at = match r {
             Ok((at, c)) => {
-                self.normal.push(c.normal.into());
-                self.k1.push(c.k1);
-                self.k2.push(c.k2);
-                self.mean.push(c.mean);
-                self.gauss.push(c.gauss);
-                self.d1.push(c.d1.into());
-                self.d2.push(c.d2.into());
+                self.normal[i] = c.normal.into();
+                self.k1[i] = c.k1;
+                self.k2[i] = c.k2;
+                self.mean[i] = c.mean;
+                self.gauss[i] = c.gauss;
+                self.d1[i] = c.d1.into();
+                self.d2[i] = c.d2.into();
                 at
             }
-            Err(_) => {
-                for v in [&mut self.normal, &mut self.d1, &mut self.d2] {
-                    v.push(NAN3);
-                }
-                for v in [&mut self.k1, &mut self.k2, &mut self.mean, &mut self.gauss] {
-                    v.push(f64::NAN);
-                }
-                *query
-            }
+            Err(_) => *query,
         };
         if let Some(projected) = &mut self.projected {
-            projected.push(at.coords.into());
+            projected[i] = at.coords.into();
         }
     }
 
@@ -170,33 +171,39 @@ pub fn curvature(
 ) -> CurvatureColumns {
     let par = Parallelism::Rayon;
     let n = points.len();
-    let mut out = CurvatureColumns::with_capacity(n, options);
+    let mut out = CurvatureColumns::new(n, options);
     let bar = Bar::new(n, curvature_label(options.at), show);
+    let mut done = 0;
     match surface {
         Surface::Fixed(surface) if options.method == Method::Jet => {
-            surface.jet_stream(points, jet, par, CHUNK, |range, results| {
-                for (r, p) in results.iter().zip(&points[range.clone()]) {
+            surface.jet_stream(points, jet, par, CHUNK, |indices, results| {
+                for (&i, r) in indices.iter().zip(results) {
+                    let p = &points[i];
                     let at = |j: &JetPoint| match options.at {
                         At::Input => *p,
                         At::Projected => j.foot,
                     };
-                    out.push(r.as_ref().map(|j| (at(j), j.curvature)).map_err(|e| *e), p);
+                    out.set(
+                        i,
+                        r.as_ref().map(|j| (at(j), j.curvature)).map_err(|e| *e),
+                        p,
+                    );
                     let sd = r.as_ref().map_or([f64::NAN; 2], |j| j.predicted_error());
-                    out.k1_sd.push(sd[0]);
-                    out.k2_sd.push(sd[1]);
+                    out.k1_sd[i] = sd[0];
+                    out.k2_sd[i] = sd[1];
                 }
-                bar.set(range.end);
+                done += indices.len();
+                bar.set(done);
             });
         }
         Surface::Fixed(surface) => {
-            let mut sink = |range: Range<usize>, results: &[PointResult]| {
-                for (r, p) in results.iter().zip(&points[range.clone()]) {
-                    out.push(
-                        r.as_ref().map(|s| (s.point, s.curvature)).map_err(|e| *e),
-                        p,
-                    );
+            let mut sink = |indices: &[usize], results: &[PointResult]| {
+                for (&i, r) in indices.iter().zip(results) {
+                    let s = r.as_ref().map(|s| (s.point, s.curvature)).map_err(|e| *e);
+                    out.set(i, s, &points[i]);
                 }
-                bar.set(range.end);
+                done += indices.len();
+                bar.set(done);
             };
             match options.at {
                 At::Input => surface.curvature_stream(points, par, CHUNK, &mut sink),
@@ -208,17 +215,16 @@ pub fn curvature(
                 At::Input => Location::Input,
                 At::Projected => Location::Projected,
             };
-            surface.curvature_stream(points, at, par, CHUNK, |range, results| {
-                for (r, p) in results.iter().zip(&points[range.clone()]) {
-                    out.push(
-                        r.as_ref().map(|s| (s.point, s.curvature)).map_err(|e| *e),
-                        p,
-                    );
+            surface.curvature_stream(points, at, par, CHUNK, |indices, results| {
+                for (&i, r) in indices.iter().zip(results) {
+                    let s = r.as_ref().map(|s| (s.point, s.curvature)).map_err(|e| *e);
+                    out.set(i, s, &points[i]);
                     let (h, noise) = r.as_ref().map_or((f64::NAN, f64::NAN), |s| (s.h, s.noise));
-                    out.h.push(h);
-                    out.noise.push(noise);
+                    out.h[i] = h;
+                    out.noise[i] = noise;
                 }
-                bar.set(range.end);
+                done += indices.len();
+                bar.set(done);
             });
         }
     }
@@ -261,31 +267,27 @@ pub struct Projection {
 pub fn projection(points: &[Point], surface: &MlsSurface, show: bool) -> Projection {
     let par = Parallelism::Rayon;
     let n = points.len();
+    // A failed point keeps its input position and has no normal.
     let mut out = Projection {
-        points: Vec::with_capacity(n),
-        normal: Vec::with_capacity(n),
-        status: Vec::with_capacity(n),
+        points: points.iter().map(|p| p.coords.into()).collect(),
+        normal: vec![NAN3; n],
+        status: vec![0; n],
         moved: Vec::new(),
     };
     let bar = Bar::new(n, "projection", show);
-    surface.projection_stream(points, par, CHUNK, |range, results| {
-        for (r, p) in results.iter().zip(&points[range.clone()]) {
-            out.status.push(status_code(r));
-            match r {
-                Ok(sp) => {
-                    out.moved
-                        .push(dist(&sp.point.coords.into(), &p.coords.into()));
-                    out.points.push(sp.point.coords.into());
-                    out.normal.push(sp.curvature.normal.into());
-                }
-                // A failed point keeps its input position.
-                Err(_) => {
-                    out.points.push(p.coords.into());
-                    out.normal.push(NAN3);
-                }
+    let mut done = 0;
+    surface.projection_stream(points, par, CHUNK, |indices, results| {
+        for (&i, r) in indices.iter().zip(results) {
+            out.status[i] = status_code(r);
+            if let Ok(sp) = r {
+                out.moved
+                    .push(dist(&sp.point.coords.into(), &points[i].coords.into()));
+                out.points[i] = sp.point.coords.into();
+                out.normal[i] = sp.curvature.normal.into();
             }
         }
-        bar.set(range.end);
+        done += indices.len();
+        bar.set(done);
     });
     out
 }

@@ -1,6 +1,11 @@
 //! Streaming evaluation: a whole query set evaluated chunk by chunk, each chunk's results
-//! handed to a callback in query order, so that a caller can draw progress or write results
-//! without holding all of them.
+//! handed to a callback with the indices of its queries, so that a caller can draw progress or
+//! write results without holding all of them.
+//!
+//! Chunks follow the queries' Morton order, not their input order: a chunk is then a compact
+//! region of space, whatever order the file had. (In input order, a shuffled cloud's chunks
+//! were scattered over the whole surface, no two queries of a cluster shared their neighbours,
+//! and the paper's method ran 1.6 times slower on a shuffled million-point sphere.)
 //!
 //! The numbers do not depend on the chunk size nor on the number of threads: each query's
 //! result is a function of the query alone. [`MlsSurface::curvature_at_points`] groups nearby
@@ -10,52 +15,99 @@
 //! around each query on its own. The chunk size is therefore only a trade between the
 //! callback's granularity and the memory of one chunk's results.
 
-use std::ops::Range;
-
 use crate::adaptive::{AdaptiveResult, AdaptiveSurface, Location};
+use crate::frame::morton_key;
 use crate::jet::{JetConfig, JetPoint};
-use crate::math::Point;
+use crate::math::{Point, Vector};
 use crate::status::PointStatus;
 use crate::surface::{MlsSurface, Parallelism, PointResult};
 
 /// A chunk size that keeps rayon's per-call set-up negligible and one chunk's results (about
 /// 1.2 KB a point while they are collected) a small part of a large run's memory.
-pub const DEFAULT_CHUNK: usize = 1 << 14;
+pub const DEFAULT_CHUNK: usize = 1 << 13;
 
-/// Calls `eval` on consecutive ranges of `0..n` of at most `chunk` (at least 1) indices, and
-/// `sink` on each range with its results.
+/// The indices of `queries` in the Morton order of their bounding cube, 10 bits per axis (a
+/// chunk only needs to be a compact region), the non-finite ones last, equal cells in input
+/// order. 4 bytes a query (after a sort of 8-byte keys, before the caller's results exist).
+fn spatial_order(queries: &[Point], par: Parallelism) -> Vec<u32> {
+    let n = queries.len();
+    let finite = |p: &Point| p.iter().all(|c| c.is_finite());
+    let inf = Vector::repeat(f64::INFINITY);
+    let (lo, hi) = queries
+        .iter()
+        .filter(|p| finite(p))
+        .fold((inf, -inf), |(lo, hi), p| {
+            (lo.inf(&p.coords), hi.sup(&p.coords))
+        });
+    let origin = (lo + hi) * 0.5;
+    let half_extent = (hi - lo).amax() * 0.5;
+    // The cell's key above the query's index, sorted in place.
+    let mut entries: Vec<u64> = par.map(n, 4096, |i| {
+        let q = &queries[i];
+        // The key's top 30 of 63 bits; one more than the largest for a non-finite query.
+        let cell = if finite(q) {
+            morton_key(&(q - origin), half_extent) >> 33
+        } else {
+            1 << 30
+        };
+        cell << 32 | i as u64
+    });
+    par.sort_unstable(&mut entries);
+    entries.into_iter().map(|e| e as u32).collect()
+}
+
+/// Calls `eval` on the queries of consecutive pieces of their [`spatial_order`], at most
+/// `chunk` (at least 1) at a time, and `sink` on each piece's query indices with its results.
+/// (More queries than a `u32` names, which no cloud in memory reaches, go in input order.)
 fn for_each_chunk<R>(
-    n: usize,
+    queries: &[Point],
     chunk: usize,
-    mut eval: impl FnMut(Range<usize>) -> Vec<R>,
-    mut sink: impl FnMut(Range<usize>, &[R]),
+    par: Parallelism,
+    mut eval: impl FnMut(&[Point]) -> Vec<R>,
+    mut sink: impl FnMut(&[usize], &[R]),
 ) {
+    if queries.is_empty() {
+        return;
+    }
     let chunk = chunk.max(1);
-    let mut start = 0;
-    while start < n {
-        let end = start.saturating_add(chunk).min(n);
-        let results = eval(start..end);
-        debug_assert_eq!(results.len(), end - start);
-        sink(start..end, &results);
-        start = end;
+    let order = if u32::try_from(queries.len()).is_ok() {
+        Some(spatial_order(queries, par))
+    } else {
+        None
+    };
+    let (mut indices, mut batch) = (Vec::new(), Vec::new());
+    for start in (0..queries.len()).step_by(chunk) {
+        let end = (start + chunk).min(queries.len());
+        indices.clear();
+        match &order {
+            Some(order) => indices.extend(order[start..end].iter().map(|&i| i as usize)),
+            None => indices.extend(start..end),
+        }
+        batch.clear();
+        batch.extend(indices.iter().map(|&i| queries[i]));
+        let results = eval(&batch);
+        debug_assert_eq!(results.len(), indices.len());
+        sink(&indices, &results);
     }
 }
 
 impl MlsSurface {
-    /// [`Self::curvature_at_points`] in chunks of `chunk` queries: `sink` receives each range
-    /// of query indices, in order, with its results. The results are bitwise those of one
-    /// call over all queries, for any `chunk` and any thread count (see [`crate::stream`]).
+    /// [`Self::curvature_at_points`] in chunks of `chunk` queries taken in their Morton order:
+    /// `sink` receives each chunk's query indices (every index once over the stream) with
+    /// their results. The results are bitwise those of one call over all queries, for any
+    /// `chunk` and any thread count (see [`crate::stream`]).
     pub fn curvature_stream(
         &self,
         queries: &[Point],
         par: Parallelism,
         chunk: usize,
-        sink: impl FnMut(Range<usize>, &[PointResult]),
+        sink: impl FnMut(&[usize], &[PointResult]),
     ) {
         for_each_chunk(
-            queries.len(),
+            queries,
             chunk,
-            |r| self.curvature_at_points(&queries[r], par),
+            par,
+            |batch| self.curvature_at_points(batch, par),
             sink,
         );
     }
@@ -66,12 +118,13 @@ impl MlsSurface {
         queries: &[Point],
         par: Parallelism,
         chunk: usize,
-        sink: impl FnMut(Range<usize>, &[PointResult]),
+        sink: impl FnMut(&[usize], &[PointResult]),
     ) {
         for_each_chunk(
-            queries.len(),
+            queries,
             chunk,
-            |r| self.project_points(&queries[r], par),
+            par,
+            |batch| self.project_points(batch, par),
             sink,
         );
     }
@@ -83,12 +136,13 @@ impl MlsSurface {
         config: &JetConfig,
         par: Parallelism,
         chunk: usize,
-        sink: impl FnMut(Range<usize>, &[Result<JetPoint, PointStatus>]),
+        sink: impl FnMut(&[usize], &[Result<JetPoint, PointStatus>]),
     ) {
         for_each_chunk(
-            queries.len(),
+            queries,
             chunk,
-            |r| self.jet_at_points(&queries[r], config, par),
+            par,
+            |batch| self.jet_at_points(batch, config, par),
             sink,
         );
     }
@@ -103,12 +157,13 @@ impl AdaptiveSurface {
         at: Location,
         par: Parallelism,
         chunk: usize,
-        sink: impl FnMut(Range<usize>, &[AdaptiveResult]),
+        sink: impl FnMut(&[usize], &[AdaptiveResult]),
     ) {
         for_each_chunk(
-            queries.len(),
+            queries,
             chunk,
-            |r| self.curvature_at_points(&queries[r], at, par),
+            par,
+            |batch| self.curvature_at_points(batch, at, par),
             sink,
         );
     }

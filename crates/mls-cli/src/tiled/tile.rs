@@ -267,7 +267,7 @@ pub(super) fn write_output(
     mls_io::write_las_chunks(run.output, compressed, template, |sink| -> Result<()> {
         for_each_chunk(run.input, run.keep_attributes, batch, |first, chunk| {
             let m = chunk.points.len();
-            let mut out = CurvatureColumns::with_capacity(m, run.options);
+            let mut out = CurvatureColumns::new(m, run.options);
             for (k, p) in chunk.points.iter().enumerate() {
                 let p = Point::from(*p);
                 let own = plan.tile_of(&p);
@@ -276,19 +276,19 @@ pub(super) fn write_output(
                 let v = |j: usize| {
                     f64::from_le_bytes(r[8 * j..8 * j + 8].try_into().unwrap_or_default())
                 };
-                out.normal.push([v(0), v(1), v(2)]);
-                out.k1.push(v(3));
-                out.k2.push(v(4));
-                out.mean.push(v(5));
-                out.gauss.push(v(6));
-                out.d1.push([v(7), v(8), v(9)]);
-                out.d2.push([v(10), v(11), v(12)]);
+                out.normal[k] = [v(0), v(1), v(2)];
+                out.k1[k] = v(3);
+                out.k2[k] = v(4);
+                out.mean[k] = v(5);
+                out.gauss[k] = v(6);
+                out.d1[k] = [v(7), v(8), v(9)];
+                out.d2[k] = [v(10), v(11), v(12)];
                 if jet {
-                    out.k1_sd.push(v(13));
-                    out.k2_sd.push(v(14));
+                    out.k1_sd[k] = v(13);
+                    out.k2_sd[k] = v(14);
                 }
                 let status = i32::from_le_bytes(r[128..132].try_into().unwrap_or_default());
-                out.status.push(status);
+                out.status[k] = status;
                 let slot = if status == 0 {
                     0
                 } else {

@@ -31,20 +31,22 @@ fn torus_cloud() -> (MlsSurface, Vec<Point>) {
     (surface, queries)
 }
 
-/// Collects a stream's chunks, checking that they arrive in order and cover every query.
-fn collect<R: Clone>(
-    n: usize,
-    stream: impl FnOnce(&mut dyn FnMut(std::ops::Range<usize>, &[R])),
-) -> Vec<R> {
-    let mut out = Vec::with_capacity(n);
-    stream(&mut |range, chunk| {
-        assert!(!range.is_empty(), "an empty chunk at {}", range.start);
-        assert_eq!(range.start, out.len());
-        assert_eq!(range.len(), chunk.len());
-        out.extend_from_slice(chunk);
+/// Collects a stream's chunks into query order, checking that no chunk is empty and that
+/// every query comes exactly once.
+fn collect<R: Clone>(n: usize, stream: impl FnOnce(&mut dyn FnMut(&[usize], &[R]))) -> Vec<R> {
+    let mut out: Vec<Option<R>> = vec![None; n];
+    stream(&mut |indices, chunk| {
+        assert!(!indices.is_empty(), "an empty chunk");
+        assert_eq!(indices.len(), chunk.len());
+        for (&i, r) in indices.iter().zip(chunk) {
+            assert!(out[i].is_none(), "query {i} came twice");
+            out[i] = Some(r.clone());
+        }
     });
-    assert_eq!(out.len(), n);
-    out
+    out.into_iter()
+        .enumerate()
+        .map(|(i, r)| r.unwrap_or_else(|| panic!("query {i} never came")))
+        .collect()
 }
 
 /// Runs `f` in a rayon pool of `threads` threads.
@@ -190,4 +192,56 @@ fn adaptive_stream_equals_the_whole_set_call() {
     let mut calls = 0;
     surface.curvature_stream(&[], Location::Input, par, 8, |_, _| calls += 1);
     assert_eq!(calls, 0, "a stream of no queries called its sink");
+}
+
+/// Chunks are compact regions whatever the input order: over a shuffled cloud, sixteen chunks'
+/// bounding boxes add up to less than four times the whole cloud's box (in input order each
+/// chunk would span about all of it, sixteen boxes in all; the Morton curve's jumps make some
+/// boxes long), and the results are those of the unshuffled queries.
+#[test]
+fn chunks_follow_space_not_input_order() {
+    let (surface, queries) = torus_cloud();
+    let finite: Vec<Point> = queries
+        .iter()
+        .filter(|q| q.iter().all(|c| c.is_finite()) && q.x < 50.0)
+        .copied()
+        .collect();
+    // A fixed shuffle: a multiplicative step coprime to the count visits every index once.
+    let n = finite.len();
+    let step = (1..)
+        .map(|k| 7919 * k + 1)
+        .find(|s| gcd(*s, n) == 1)
+        .unwrap();
+    let shuffled: Vec<Point> = (0..n).map(|i| finite[i * step % n]).collect();
+    let volume = |points: &mut dyn Iterator<Item = Point>| {
+        let first = points.next().unwrap().coords;
+        let (lo, hi) = points.fold((first, first), |(lo, hi), p| {
+            (lo.inf(&p.coords), hi.sup(&p.coords))
+        });
+        (hi - lo).product()
+    };
+    let whole = volume(&mut shuffled.iter().copied());
+    let mut boxes = 0.0;
+    let mut results = Vec::new();
+    surface.curvature_stream(
+        &shuffled,
+        Parallelism::Rayon,
+        n.div_ceil(16),
+        |indices, chunk| {
+            boxes += volume(&mut indices.iter().map(|&i| shuffled[i]));
+            results.extend(indices.iter().copied().zip(chunk.iter().cloned()));
+        },
+    );
+    assert!(
+        boxes < 4.0 * whole,
+        "chunks' boxes {boxes} against the cloud's {whole}"
+    );
+    let direct = surface.curvature_at_points(&finite, Parallelism::Rayon);
+    results.sort_by_key(|(i, _)| i * step % n);
+    let streamed: Vec<_> = results.into_iter().map(|(_, r)| r).collect();
+    assert_bitwise(&direct, &streamed, "shuffled");
+}
+
+fn gcd(a: usize, b: usize) -> usize {
+    if b == 0 { a } else { gcd(b, a % b) }
 }
