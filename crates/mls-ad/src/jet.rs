@@ -1,6 +1,7 @@
 //! The jet estimator's witness: the same definition (`mls_core::jet`'s documentation) computed
-//! by another route. Its own support (a brute-force distance filter over every sample), its
-//! own tangent basis, the normal equations formed from the dense weighted design matrix and
+//! by another route. Its own support (a brute-force distance filter over every sample),
+//! production's tangent basis (a convention on which the degree test depends), the normal
+//! equations formed from the dense weighted design matrix and
 //! solved by LU (mls-core accumulates them row by row and uses Cholesky), a cluster-robust
 //! covariance from per-sample score vectors, and the curvature of the fitted surface
 //! `F = w − P(u, v)` by hyper-dual differentiation and a 3 × 3 eigen-decomposition.
@@ -301,14 +302,16 @@ pub fn jet_candidates(
                     .sum()
             };
             let n = sum.normalize();
-            // Our own tangent basis (any will do: the fit is rotation-invariant in (u, v)).
-            let a = if n.z.abs() < 0.8 {
-                Vector3::z()
-            } else {
-                Vector3::x()
-            };
-            let t1 = a.cross(&n).normalize();
-            (t1, n.cross(&t1), n)
+            // Production's tangent basis. The fit is rotation-invariant in (u, v), but which
+            // degree the samples determine is not: the pivot test asks how much of each
+            // monomial u^i v^j lies outside the span of those before it, and turning the
+            // basis changes the monomials. With another basis a layout near the threshold
+            // (a squared pivot at 0.985 × 1e-5 of its own entry on a sphere patch of 8
+            // samples) was fitted at degree 4 here and 3 there, and every scale after it
+            // took another λ. The basis is a convention, not a formula under test: AD of F
+            // still checks the closed form's gradient and Hessian for it.
+            let (t1, t2) = mls_core::math::tangent_basis(&n);
+            (t1, t2, n)
         });
         // Samples facing away from the frame belong to another sheet.
         let near: Vec<_> = near
