@@ -56,30 +56,34 @@ impl NeighbourGraph {
                 neighbours,
             });
         }
+        // The queries run in storage (Morton) order, so that consecutive ones walk the same
+        // branches of the tree whatever the input order (a shuffled million-point sphere took
+        // 2.2 times as long in input order), a chunk at a time; each chunk's rows are then
+        // copied to their points' places.
         let order = &cloud.order;
-        let mut rank = vec![0_u32; n];
-        for (s, &i) in order.iter().enumerate() {
-            rank[i as usize] = s as u32;
-        }
-        let fill = |(i, row): (usize, &mut [u32])| {
-            fill_row(
-                &cloud.tree,
-                &cloud.local(rank[i] as usize),
-                rank[i] as usize,
-                n,
-                row,
-            );
+        let fill = |s: usize, row: &mut [u32]| {
+            fill_row(&cloud.tree, &cloud.local(s), s, n, row);
             for r in row.iter_mut() {
                 *r = order[*r as usize];
             }
         };
-        match par {
-            Parallelism::Sequential => neighbours.chunks_mut(k_eff).enumerate().for_each(fill),
-            Parallelism::Rayon => neighbours
-                .par_chunks_mut(k_eff)
-                .with_min_len(256)
-                .enumerate()
-                .for_each(fill),
+        let mut rows = vec![0_u32; GRAPH_CHUNK.min(n) * k_eff];
+        for start in (0..n).step_by(GRAPH_CHUNK) {
+            let end = (start + GRAPH_CHUNK).min(n);
+            let rows = &mut rows[..(end - start) * k_eff];
+            let at = |(j, row): (usize, &mut [u32])| fill(start + j, row);
+            match par {
+                Parallelism::Sequential => rows.chunks_mut(k_eff).enumerate().for_each(at),
+                Parallelism::Rayon => rows
+                    .par_chunks_mut(k_eff)
+                    .with_min_len(256)
+                    .enumerate()
+                    .for_each(at),
+            }
+            for (s, row) in (start..end).zip(rows.chunks(k_eff)) {
+                let i = order[s] as usize;
+                neighbours[i * k_eff..(i + 1) * k_eff].copy_from_slice(row);
+            }
         }
         Ok(Self {
             points: n,
@@ -121,6 +125,9 @@ impl NeighbourGraph {
         self.neighbours
     }
 }
+
+/// Points whose neighbour rows are found together before being put in input order.
+const GRAPH_CHUNK: usize = 1 << 14;
 
 /// Writes the `row.len()` nearest neighbours of item `i` (at `at`) of a tree of `n` points into
 /// `row`.

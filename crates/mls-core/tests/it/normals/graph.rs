@@ -60,3 +60,39 @@ fn neighbour_graph_matches_brute_force() {
     }
     assert!(small.neighbours(99).is_empty());
 }
+
+/// A cloud of several of the graph's chunks of queries (16,384 points each, run in Morton
+/// order and put back in input order): every row is still its own point's, checked against
+/// brute force on a sample of points, and sequential and parallel runs agree.
+#[test]
+fn rows_of_a_large_cloud_are_their_own_points() {
+    let mut rng = ChaCha8Rng::seed_from_u64(CLOUD_SEED + 1);
+    let points: Vec<Point> = (0..40_000)
+        .map(|_| {
+            Point::new(
+                rng.random_range(-1.0..1.0),
+                rng.random_range(-1.0..1.0),
+                rng.random_range(-0.05..0.05),
+            )
+        })
+        .collect();
+    let k = 8;
+    let graph = NeighbourGraph::build(&points, k, PAR).unwrap();
+    assert_eq!(graph, NeighbourGraph::build(&points, k, SEQ).unwrap());
+    for (i, p) in points.iter().enumerate().step_by(97) {
+        let found: Vec<f64> = graph
+            .neighbours(i)
+            .iter()
+            .map(|&j| (points[j as usize] - p).norm_squared())
+            .collect();
+        let mut brute: Vec<f64> = points
+            .iter()
+            .enumerate()
+            .filter(|&(j, _)| j != i)
+            .map(|(_, q)| (q - p).norm_squared())
+            .collect();
+        brute.select_nth_unstable_by(k, f64::total_cmp);
+        brute[..k].sort_by(f64::total_cmp);
+        assert_eq!(found, brute[..k], "point {i}");
+    }
+}
