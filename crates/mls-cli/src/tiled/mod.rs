@@ -155,7 +155,8 @@ pub fn curvature(run: &TiledRun<'_>, t: &mut Timings) -> Result<TiledSummary> {
         bail!(
             "--memory {} MiB: too small; a tiled run needs at least {} MiB",
             run.budget >> 20,
-            (FIXED_BYTES + 1000 * BYTES_PER_POINT) >> 20
+            // Rounded up: the least whole number of MiB that is enough.
+            (FIXED_BYTES + 1000 * BYTES_PER_POINT).div_ceil(1 << 20)
         );
     }
 
