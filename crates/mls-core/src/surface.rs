@@ -396,5 +396,7 @@ pub(crate) struct Hits {
 const CLUSTER: usize = 16;
 
 /// Queries sharing one neighbour search in [`MlsSurface::curvature_at_points`] where they lie
-/// close enough, each group of [`CLUSTER`] then filtering the candidates again.
+/// close enough, each group of [`CLUSTER`] then filtering the candidates again. The search's
+/// cost grows with its hits, not per call: 64 took it from 19 % to 12 % of the 1M sphere's
+/// profile; 256 gained nothing more (the groups then filter a larger list each).
 const WIDE_CLUSTER: usize = 64;
