@@ -28,7 +28,7 @@ pub const DEFAULT_CHUNK: usize = 1 << 13;
 
 /// The indices of `queries` in the Morton order of their bounding cube, 10 bits per axis (a
 /// chunk only needs to be a compact region), the non-finite ones last, equal cells in input
-/// order. 4 bytes a query (after a sort of 8-byte keys, before the caller's results exist).
+/// order. 4 bytes a query, after a sort of 8-byte keys.
 fn spatial_order(queries: &[Point], par: Parallelism) -> Vec<u32> {
     let n = queries.len();
     let finite = |p: &Point| p.iter().all(|c| c.is_finite());
