@@ -57,6 +57,7 @@ impl Cloud {
         self.truth
             .iter()
             .flat_map(|k| k.iter())
+            .filter(|k| k.is_finite())
             .fold(0.0f64, |m, k| m.max(k.abs()))
     }
 }
@@ -226,6 +227,17 @@ fn run_method(method: &Method, cloud: &Cloud, normals: &[Vector], h: f64) -> Res
 /// Degree-4 least-squares Monge fits on the `k` nearest neighbours, frame from PCA oriented by
 /// `normals`; an implementation independent of mls-core.
 pub(crate) fn reference_jets(points: &[Point], normals: &[Vector], k: usize) -> Vec<[f64; 2]> {
+    reference_jets_of_degree(points, normals, k, 4)
+}
+
+/// Least-squares Monge fits of total degree `degree` on the `k` nearest neighbours, unweighted,
+/// in the PCA frame oriented by `normals`: CGAL's `Monge_via_jet_fitting` as its users tune it.
+pub(crate) fn reference_jets_of_degree(
+    points: &[Point],
+    normals: &[Vector],
+    k: usize,
+    degree: i32,
+) -> Vec<[f64; 2]> {
     let coords: Vec<[f64; 3]> = points.iter().map(|p| (*p).into()).collect();
     let tree: ImmutableKdTree<f64, 3> = ImmutableKdTree::new_from_slice(&coords).expect("tree");
     let k = std::num::NonZeroUsize::new(k).expect("k > 0");
@@ -257,12 +269,13 @@ pub(crate) fn reference_jets(points: &[Point], normals: &[Vector], k: usize) -> 
             let u = u.normalize();
             let v = w.cross(&u);
             let scale = nb.iter().map(|d| d.norm()).fold(0.0f64, f64::max);
-            let mut a = DMatrix::zeros(nb.len(), 15);
+            let unknowns = ((degree + 1) * (degree + 2) / 2) as usize;
+            let mut a = DMatrix::zeros(nb.len(), unknowns);
             let mut b = DVector::zeros(nb.len());
             for (r, d) in nb.iter().enumerate() {
                 let (x, y) = (d.dot(&u) / scale, d.dot(&v) / scale);
                 let mut c = 0;
-                for deg in 0..=4 {
+                for deg in 0..=degree {
                     for j in 0..=deg {
                         a[(r, c)] = x.powi(deg - j) * y.powi(j);
                         c += 1;
@@ -306,13 +319,16 @@ pub(crate) struct Stats {
     pub failed: usize,
 }
 
-fn stats(cloud: &Cloud, k: &[[f64; 2]]) -> Stats {
+pub(crate) fn stats(cloud: &Cloud, k: &[[f64; 2]]) -> Stats {
     let max = cloud.max_abs_k();
     let mut out = Stats::default();
     for c in 0..2 {
+        // Outliers have no truth (NaN) and are not scored here.
+        let scored = cloud.truth.iter().filter(|t| t[c].is_finite()).count();
         let mut e: Vec<f64> = k
             .iter()
             .zip(&cloud.truth)
+            .filter(|(_, t)| t[c].is_finite())
             .map(|(k, t)| k[c] - t[c])
             .filter(|e| e.is_finite())
             .collect();
@@ -329,19 +345,19 @@ fn stats(cloud: &Cloud, k: &[[f64; 2]]) -> Stats {
             .copied()
             .unwrap_or(f64::NAN);
         if c == 0 {
-            out.failed = k.len() - e.len();
+            out.failed = scored - e.len();
         }
     }
     out
 }
 
 /// h = 2 × the median local spacing, as the CLI.
-fn default_h(points: &[Point]) -> Result<f64> {
+pub(crate) fn default_h(points: &[Point]) -> Result<f64> {
     let stats = spacing_statistics(points, DEFAULT_SPACING_NEIGHBOURS, Parallelism::Rayon)?;
     Ok(suggest_h(&stats, mls_core::normals::DEFAULT_H_FACTOR)?)
 }
 
-fn estimated_normals(points: &[Point], h: f64) -> Result<Vec<Vector>> {
+pub(crate) fn estimated_normals(points: &[Point], h: f64) -> Result<Vec<Vector>> {
     let config = NormalsConfig {
         h: Some(h),
         ..NormalsConfig::default()
@@ -443,7 +459,7 @@ pub(crate) fn calibration(k: &[[f64; 2]], truth: &[[f64; 2]], sd: &[[f64; 2]]) -
         .iter()
         .zip(truth)
         .zip(sd)
-        .filter(|((k, _), s)| k[0].is_finite() && s[0].is_finite())
+        .filter(|((k, t), s)| k[0].is_finite() && t[0].is_finite() && s[0].is_finite())
         .map(|((k, t), s)| (s[0], k[0] - t[0]))
         .collect();
     rows.sort_unstable_by(|a, b| a.0.total_cmp(&b.0));

@@ -6,6 +6,7 @@ use std::process::Command;
 use anyhow::{Context, Result, bail};
 
 mod accuracy;
+mod accuracy_noisy;
 mod bench;
 mod bench_tiled;
 mod defaults;
@@ -75,6 +76,15 @@ enum Task {
         /// Only the clouds whose name contains this.
         cloud: Option<String>,
     },
+    /// Noisy clouds without normals (noise, outliers, line-of-sight noise, an ellipsoid): the
+    /// default jet against the peers a user would tune (issue 37), printed.
+    AccuracyNoisy {
+        /// Only the clouds whose name contains this.
+        cloud: Option<String>,
+        /// Also the peers (degree-2 and -4 jets on 50 to 200 neighbours, paper --adaptive).
+        #[arg(long)]
+        peers: bool,
+    },
     /// A seeded airborne-LiDAR test cloud (terrain, buildings, trees, scan strips) of exactly
     /// N points, streamed as LAS 1.4 point format 6 or LAZ.
     GenCloud(gen_cloud::Args),
@@ -115,6 +125,7 @@ fn run(task: Task) -> Result<()> {
         Task::Paper(o) => paper::run(&o),
         Task::Accuracy { seeds } => accuracy::run(seeds),
         Task::AccuracyExplore { cloud } => accuracy::explore(cloud.as_ref()),
+        Task::AccuracyNoisy { cloud, peers } => accuracy_noisy::explore(cloud.as_ref(), peers),
         Task::GenCloud(args) => gen_cloud::run(&args.options(&invoked_from)),
         Task::Ci => ci(),
     }
