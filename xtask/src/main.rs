@@ -84,6 +84,9 @@ enum Task {
         /// Also the peers (degree-2 and -4 jets on 50 to 200 neighbours, paper --adaptive).
         #[arg(long)]
         peers: bool,
+        /// Write docs/accuracy-noisy.md (with --peers: the whole page).
+        #[arg(long)]
+        write: bool,
     },
     /// A seeded airborne-LiDAR test cloud (terrain, buildings, trees, scan strips) of exactly
     /// N points, streamed as LAS 1.4 point format 6 or LAZ.
@@ -125,7 +128,11 @@ fn run(task: Task) -> Result<()> {
         Task::Paper(o) => paper::run(&o),
         Task::Accuracy { seeds } => accuracy::run(seeds),
         Task::AccuracyExplore { cloud } => accuracy::explore(cloud.as_ref()),
-        Task::AccuracyNoisy { cloud, peers } => accuracy_noisy::explore(cloud.as_ref(), peers),
+        Task::AccuracyNoisy {
+            cloud,
+            peers,
+            write,
+        } => accuracy_noisy::explore(cloud.as_ref(), peers, write),
         Task::GenCloud(args) => gen_cloud::run(&args.options(&invoked_from)),
         Task::Ci => ci(),
     }

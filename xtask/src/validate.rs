@@ -222,6 +222,15 @@ struct Worst {
     evals: usize,
 }
 
+/// The jet results of one choice: how many, and their worst differences from the witness in
+/// units of the thresholds of the jet rows.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct JetChoices {
+    count: usize,
+    k: f64,
+    error: f64,
+}
+
 #[derive(Clone, Debug, Default)]
 pub(crate) struct Tally {
     worst: [Worst; ROWS.len()],
@@ -230,6 +239,9 @@ pub(crate) struct Tally {
     pub skipped: usize,
     /// Evaluations per production entry point and execution variant.
     pub entries: BTreeMap<String, usize>,
+    /// The jet's choices (degree, and support of a degree-2 candidate) per kind of cloud and
+    /// normal data.
+    pub jet_choices: BTreeMap<(&'static str, String), JetChoices>,
 }
 
 impl Tally {
@@ -247,6 +259,15 @@ impl Tally {
         *self.entries.entry(name).or_default() += count;
     }
 
+    /// One jet result of `setting` with the choice `chosen`, and its differences from the
+    /// witness (in units of their rows' thresholds) where both sides found it.
+    pub fn jet_choice(&mut self, setting: &'static str, chosen: String, k: f64, error: f64) {
+        let c = self.jet_choices.entry((setting, chosen)).or_default();
+        c.count += 1;
+        c.k = c.k.max(k);
+        c.error = c.error.max(error);
+    }
+
     fn merge(mut self, other: Self) -> Self {
         for (a, b) in self.worst.iter_mut().zip(other.worst) {
             a.evals += b.evals;
@@ -259,6 +280,12 @@ impl Tally {
         self.skipped += other.skipped;
         for (k, v) in other.entries {
             *self.entries.entry(k).or_default() += v;
+        }
+        for (k, v) in other.jet_choices {
+            let c = self.jet_choices.entry(k).or_default();
+            c.count += v.count;
+            c.k = c.k.max(v.k);
+            c.error = c.error.max(v.error);
         }
         self
     }
@@ -336,6 +363,22 @@ pub(crate) fn run(o: &Options) -> Result<()> {
     report.push_str("\nEvaluations per production entry point and execution path:\n\n| entry point | evaluations |\n| --- | --- |\n");
     for (entry, count) in &tally.entries {
         writeln!(report, "| {entry} | {count} |")?;
+    }
+    report.push_str(
+        "\nThe jet's choices, per kind of cloud and normal data (heights only, degree 2 at a support \
+         ρ of 3h to 8.5h is a degree-2 candidate of `JetConfig::quadratic`, or where no scale \
+         determines degree 4 the ladder's own lower-degree fit):\n\n\
+         | cloud, normal data | chosen | evaluations | worst jet k1, k2 | worst jet predicted error |\n\
+         | --- | --- | --- | --- | --- |\n",
+    );
+    for ((setting, chosen), c) in &tally.jet_choices {
+        writeln!(
+            report,
+            "| {setting} | {chosen} | {} | {:.2e} | {:.2e} |",
+            c.count,
+            c.k * THRESHOLD,
+            c.error * SD_THRESHOLD
+        )?;
     }
     report.push_str(NORMALISATION_NOTE);
 

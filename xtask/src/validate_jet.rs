@@ -1,13 +1,20 @@
 //! The jet rows of `cargo xtask validate`: `MlsSurface::jet_stream` (the CLI's path, in chunks
 //! of a random size, bitwise `jet_at_points`) against `mls_ad::jet_witness`.
 
-use mls_core::{MlsSurface, Point};
+use mls_core::{
+    JetConfig, JetPoint, MlsConfig, MlsSurface, NormalData, NormalsConfig, Parallelism, Point,
+    PointStatus, Sample, Vector, estimate_normals,
+};
+use mls_shapes::{ParametricSurface, Sphere, Torus, derivatives};
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
 
 use crate::validate::{Q, SD_THRESHOLD, THRESHOLD, Tally};
 use crate::validate_shapes as cases;
 use crate::validate_sweep::streamed;
+
+/// Queries of the noisy heights-only cloud of each case.
+const NOISY_QUERIES: usize = 12;
 
 /// The jet estimator through the whole-cloud entry point against its witness, which filters
 /// its support from every sample of the patch by brute force.
@@ -19,23 +26,15 @@ pub(crate) fn compare_jets(
     queries: &[Point],
     rng: &mut ChaCha8Rng,
 ) {
-    let config = mls_core::JetConfig {
+    let config = JetConfig {
         normals: if rng.random_bool(0.5) {
-            mls_core::NormalData::Slopes
+            NormalData::Slopes
         } else {
-            mls_core::NormalData::Ignore
+            NormalData::Ignore
         },
-        ..mls_core::JetConfig::default()
+        ..JetConfig::default()
     };
-    let samples: Vec<mls_core::Sample> = patch
-        .points
-        .iter()
-        .zip(&patch.normals)
-        .map(|(p, n)| mls_core::Sample {
-            point: *p,
-            normal: n.normalize(),
-        })
-        .collect();
+    let samples = samples_of(&patch.points, &patch.normals);
     // The CLI's path: the stream in chunks of a random size, then against the witness.
     let results = streamed(
         tally,
@@ -46,40 +45,240 @@ pub(crate) fn compare_jets(
         |par, chunk, sink| surface.jet_stream(queries, &config, par, chunk, sink),
         |par| surface.jet_at_points(queries, &config, par),
     );
-    for (x, r) in queries.iter().zip(results) {
-        let candidates = mls_ad::jet_candidates(&x.coords, &samples, patch.h, &config);
-        // The witness's choice; a production choice of another accepted scale whose estimated
-        // error ties the least within 1e-4 (the two routes' error estimates agree to ~1e-5)
-        // is a tie broken by rounding, not a wrong formula: compare against that scale.
+    let setting = match config.normals {
+        NormalData::Slopes => "clean patch, slopes",
+        NormalData::Ignore => "clean patch, heights only",
+    };
+    let compared = Compared {
+        setting,
+        config: &config,
+        samples: &samples,
+        h: patch.h,
+    };
+    compared.record(tally, seed, queries, results);
+    compare_noisy_heights(tally, seed, rng);
+}
+
+/// The witness's cloud: each point with its unit normal.
+fn samples_of(points: &[Point], normals: &[Vector]) -> Vec<Sample> {
+    points
+        .iter()
+        .zip(normals)
+        .map(|(p, n)| Sample {
+            point: *p,
+            normal: n.normalize(),
+        })
+        .collect()
+}
+
+/// Heights only on a noisy cloud, where the degree-2 candidates (`JetConfig::quadratic`) win
+/// at most queries: a sphere or torus patch sampled within 10h of a random interior point
+/// (every degree-2 support, up to 8.5h, inside it), h 1.5–3 spacings and 1–4 % of the
+/// smallest radius of curvature, Gaussian position noise of 0.1–0.3 spacings per coordinate,
+/// the normals (the frame only) exact, tilted by up to 0.1 rad or estimated
+/// (`estimate_normals`, sign as it orients them); at queries near the centre, on a sample or
+/// on the surface, some off it by up to h/2.
+fn compare_noisy_heights(tally: &mut Tally, seed: u64, rng: &mut ChaCha8Rng) {
+    let (points, normals, h, near) = if rng.random_bool(0.5) {
+        noisy_patch(&Sphere::centered(rng.random_range(0.3..2.0)), rng)
+    } else {
+        let torus = Torus {
+            major: 1.0,
+            minor: rng.random_range(0.15..0.5),
+        };
+        noisy_patch(&torus, rng)
+    };
+    let Ok(surface) = MlsSurface::new(&points, &normals, MlsConfig::new(h)) else {
+        tally.record(Q::Status, 1.0, seed);
+        return;
+    };
+    let queries: Vec<Point> = (0..NOISY_QUERIES)
+        .map(|_| {
+            if rng.random_bool(0.5) {
+                // A sample near the centre (its own noise off the surface).
+                let i = near.0[rng.random_range(0..near.0.len())];
+                points[i]
+            } else {
+                let (p, n) = near.1[rng.random_range(0..near.1.len())];
+                let off = if rng.random_bool(0.5) { 0.0 } else { 0.5 };
+                p + n * (off * rng.random_range(-1.0..1.0) * h)
+            }
+        })
+        .collect();
+    let config = JetConfig {
+        normals: NormalData::Ignore,
+        ..JetConfig::default()
+    };
+    let results = streamed(
+        tally,
+        seed,
+        rng,
+        queries.len(),
+        ("jet_stream", "jet_at_points"),
+        |par, chunk, sink| surface.jet_stream(&queries, &config, par, chunk, sink),
+        |par| surface.jet_at_points(&queries, &config, par),
+    );
+    let samples = samples_of(&points, &normals);
+    let compared = Compared {
+        setting: "noisy patch, heights only",
+        config: &config,
+        samples: &samples,
+        h,
+    };
+    compared.record(tally, seed, &queries, results);
+}
+
+/// A noisy cloud of `s` around a random interior point: points, normals, h, and near the
+/// centre (within h) the indices of the samples and the surface points with their normals.
+#[allow(clippy::type_complexity)]
+fn noisy_patch<S: ParametricSurface>(
+    s: &S,
+    rng: &mut ChaCha8Rng,
+) -> (
+    Vec<Point>,
+    Vec<Vector>,
+    f64,
+    (Vec<usize>, Vec<(Point, Vector)>),
+) {
+    let [du, dv] = s.domain();
+    let (u0, v0) = (
+        du.lerp(rng.random_range(0.3..0.7)),
+        dv.lerp(rng.random_range(0.3..0.7)),
+    );
+    let at = s.at(u0, v0);
+    let centre = at.point;
+    let smallest = 1.0 / at.k1.abs().max(at.k2.abs()).max(1e-3);
+    let h = rng.random_range(0.01..0.08) * smallest;
+    let spacing = h / rng.random_range(1.5..3.0);
+    let radius = 10.0 * h;
+    let d = derivatives(s, u0, v0);
+    let (su, sv) = (d.du.norm(), d.dv.norm());
+    let (hu, hv) = (1.5 * radius / su, 1.5 * radius / sv);
+    let count = ((2.0 * hu * su) * (2.0 * hv * sv) / (spacing * spacing)).ceil() as usize;
+    let (mut points, mut exact) = (Vec::new(), Vec::new());
+    let mut on_surface = Vec::new();
+    for _ in 0..count {
+        let sp = s.at(
+            du.normalize(u0 + rng.random_range(-hu..hu)),
+            dv.normalize(v0 + rng.random_range(-hv..hv)),
+        );
+        let dist = (sp.point - centre).norm();
+        if dist > radius {
+            continue;
+        }
+        if dist < h {
+            on_surface.push((sp.point, sp.normal));
+        }
+        points.push(sp.point);
+        exact.push(sp.normal);
+    }
+    if on_surface.is_empty() {
+        on_surface.push((centre, at.normal));
+    }
+    let points = mls_shapes::add_position_noise(
+        &points,
+        10f64.powf(rng.random_range(-2.0..-0.5)) * spacing,
+        rng.random(),
+    );
+    let normals = match rng.random_range(0..3) {
+        0 => exact,
+        1 => mls_shapes::perturb_normals(&exact, 0.1, rng.random()),
+        _ => {
+            let config = NormalsConfig {
+                h: Some(h),
+                ..NormalsConfig::default()
+            };
+            match estimate_normals(&points, &config, Parallelism::Sequential) {
+                Ok(est) => est
+                    .estimates
+                    .iter()
+                    .zip(&exact)
+                    .map(|(e, v)| e.as_ref().map_or(*v, |e| e.normal.into_inner()))
+                    .collect(),
+                Err(_) => exact,
+            }
+        }
+    };
+    let samples: Vec<usize> = (0..points.len())
+        .filter(|&i| (points[i] - centre).norm() < h)
+        .collect();
+    let samples = if samples.is_empty() {
+        vec![0]
+    } else {
+        samples
+    };
+    (points, normals, h, (samples, on_surface))
+}
+
+/// What the jet results of one cloud are compared with.
+struct Compared<'a> {
+    /// The cloud and normal data, for the report's count of chosen degrees.
+    setting: &'static str,
+    config: &'a JetConfig,
+    samples: &'a [Sample],
+    h: f64,
+}
+
+impl Compared<'_> {
+    /// Each result against the witness at its query.
+    fn record(
+        &self,
+        tally: &mut Tally,
+        seed: u64,
+        queries: &[Point],
+        results: Vec<Result<JetPoint, PointStatus>>,
+    ) {
+        for (x, r) in queries.iter().zip(results) {
+            self.record_one(tally, seed, x, r);
+        }
+    }
+
+    fn record_one(
+        &self,
+        tally: &mut Tally,
+        seed: u64,
+        x: &Point,
+        r: Result<JetPoint, PointStatus>,
+    ) {
+        let candidates = mls_ad::jet_candidates(&x.coords, self.samples, self.h, self.config);
+        // The witness's choice; a production choice of another candidate (degree and support)
+        // whose estimated error ties the least within 1e-4 (the two routes' error estimates
+        // agree to ~1e-5) is a tie broken by rounding, not a wrong formula: compare against
+        // that candidate.
         let witness = candidates.as_ref().and_then(|c| {
             let least = c.iter().map(|(m, _)| *m).fold(f64::INFINITY, f64::min);
             let chosen = c.iter().find(|(m, _)| *m == least).map(|(_, w)| *w);
             match &r {
                 Ok(j) => c
                     .iter()
-                    .find(|(m, w)| w.radius == j.fit.radius && *m <= least * (1.0 + 1e-4))
+                    .find(|(m, w)| {
+                        (w.degree, w.radius) == (j.fit.degree, j.fit.radius)
+                            && *m <= least * (1.0 + 1e-4)
+                    })
                     .map(|(_, w)| *w)
                     .or(chosen),
                 Err(_) => chosen,
             }
         });
+        let chosen = r.as_ref().ok().map(|j| {
+            if j.fit.degree == 2 && self.config.normals == NormalData::Ignore {
+                format!("degree 2, ρ = {:.1}h", j.fit.radius / self.h)
+            } else {
+                format!("degree {}", j.fit.degree)
+            }
+        });
+        let h = self.h;
         match (r, witness) {
             (Ok(j), Some(w)) => {
-                let kappa = w.k1.abs().max(w.k2.abs()).max(1.0 / patch.h);
+                let kappa = w.k1.abs().max(w.k2.abs()).max(1.0 / h);
                 // A least-squares solution carries rounding of about cond(M)·ε whatever the
                 // route; differences are measured against that bound where it exceeds the
                 // threshold (reported at the threshold's scale).
                 let rounding = (1e3 * f64::EPSILON * w.condition / THRESHOLD).max(1.0);
-                tally.record(
-                    Q::JetK1,
-                    (j.curvature.k1 - w.k1).abs() / kappa / rounding,
-                    seed,
-                );
-                tally.record(
-                    Q::JetK2,
-                    (j.curvature.k2 - w.k2).abs() / kappa / rounding,
-                    seed,
-                );
+                let k = [(j.curvature.k1 - w.k1), (j.curvature.k2 - w.k2)]
+                    .map(|d| d.abs() / kappa / rounding);
+                tally.record(Q::JetK1, k[0], seed);
+                tally.record(Q::JetK2, k[1], seed);
                 let pe = j.predicted_error();
                 let we = [w.sd[0].hypot(w.bias[0]), w.sd[1].hypot(w.bias[1])];
                 let sd = (pe[0] - we[0]).abs().max((pe[1] - we[1]).abs());
@@ -89,7 +288,16 @@ pub(crate) fn compare_jets(
                     // residuals at rounding level and carries their rounding.
                     .max(1e3 * mls_core::jet::SD_FLOOR / w.radius);
                 let sd_rounding = (1e3 * f64::EPSILON * w.condition / SD_THRESHOLD).max(1.0);
-                tally.record(Q::JetError, sd / sd_scale / sd_rounding, seed);
+                let error = sd / sd_scale / sd_rounding;
+                tally.record(Q::JetError, error, seed);
+                if let Some(chosen) = chosen {
+                    tally.jet_choice(
+                        self.setting,
+                        chosen,
+                        k[0].max(k[1]) / THRESHOLD,
+                        error / SD_THRESHOLD,
+                    );
+                }
                 let same = j.fit.degree == w.degree && j.fit.radius == w.radius;
                 tally.record(Q::JetChoice, if same { 0.0 } else { 1.0 }, seed);
                 tally.evals += 1;

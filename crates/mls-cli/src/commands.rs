@@ -105,12 +105,23 @@ pub fn curvature(a: CurvatureArgs) -> Result<()> {
             }
             match a.method {
                 Method::Jet => eprintln!(
-                    "  method          jet: weighted degree-{} fit, support {}{}h to {:.1}h chosen per point; normals {}",
+                    "  method          jet: weighted degree-{} fit, support {}{}h to {:.1}h{} chosen per point; normals {}",
                     jet.degree,
                     jet.lead_radius()
                         .map_or(String::new(), |r| format!("{r:.2}h (lead), ")),
                     jet.radius,
                     jet.max_radius(),
+                    if jet.quadratic && !normals_from_file {
+                        format!(
+                            ", or degree 2 on {:.0}h to {:.1}h",
+                            mls_core::jet::QUADRATIC_RADIUS,
+                            mls_core::jet::QUADRATIC_RADIUS
+                                * std::f64::consts::SQRT_2
+                                    .powi(mls_core::jet::QUADRATIC_SCALES as i32 - 1)
+                        )
+                    } else {
+                        String::new()
+                    },
                     if normals_from_file {
                         "fitted as slopes"
                     } else {

@@ -41,9 +41,11 @@ pub enum At {
 /// The curvature estimator.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub enum Method {
-    /// Weighted degree-4 polynomial jets in the frame of the MLS normal, with the support
-    /// chosen per point and a predicted error per point (columns k1_sd, k2_sd). Accurate on
-    /// irregular samples, scan boundaries and noise (docs/accuracy.md).
+    /// Weighted polynomial jets in the frame of the MLS normal: degree 4 on small supports,
+    /// and without file normals also degree 2 on large ones (noisy scans), the degree and
+    /// support of least predicted error chosen per point, with that error per point (columns
+    /// k1_sd, k2_sd). Accurate on irregular samples, scan boundaries and noise
+    /// (docs/accuracy.md).
     Jet,
     /// The Amenta-Kil MLS surface in closed form (Yang & Qian 2007): exact for that surface,
     /// accurate on regular grids, biased on irregular samples.

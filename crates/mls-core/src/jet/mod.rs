@@ -44,9 +44,11 @@ use crate::status::PointStatus;
 
 mod algebra;
 mod fit;
+mod quadratic;
 
 pub(crate) use fit::jet_fit;
 pub use fit::{JetScratch, fit};
+pub use quadratic::{HighTerms, Leak, QuadraticScratch, Sensitivity, high_terms, quadratic};
 
 /// Exponents `(i, j)` of the monomials `u^i v^j`, by total degree: the first
 /// `(d + 1)(d + 2)/2` are the basis of degree `d`.
@@ -100,7 +102,20 @@ pub struct JetConfig {
     pub confidence: f64,
     /// Whether the samples' normals enter the fit.
     pub normals: NormalData,
+    /// With [`NormalData::Ignore`], whether degree-2 fits on supports from
+    /// [`QUADRATIC_RADIUS`]·h up to [`QUADRATIC_SCALES`] √2 steps (at most
+    /// [`QUADRATIC_MAX_SAMPLES`] samples) join the candidates, each with its truncation bias
+    /// predicted from a degree-4 fit on the largest ([`quadratic`]).
+    pub quadratic: bool,
 }
+
+/// The first degree-2 support radius, in h.
+pub const QUADRATIC_RADIUS: f64 = 3.0;
+/// Number of degree-2 supports, each √2 times the previous.
+pub const QUADRATIC_SCALES: usize = 4;
+/// The most samples a degree-2 support may hold: the largest support is the largest of the
+/// ladder within this count.
+pub const QUADRATIC_MAX_SAMPLES: usize = 2048;
 
 impl Default for JetConfig {
     fn default() -> Self {
@@ -111,6 +126,7 @@ impl Default for JetConfig {
             lead: true,
             confidence: 3.0,
             normals: NormalData::Slopes,
+            quadratic: true,
         }
     }
 }
@@ -234,6 +250,14 @@ pub fn past_optimum(ladder: &[JetPoint]) -> bool {
 /// # Panics
 /// If `accepted` is 0.
 pub fn choose_scale(ladder: &[JetPoint], accepted: usize) -> JetPoint {
+    choose_scale_with_mse(ladder, accepted).1
+}
+
+/// [`choose_scale`] with the estimated mean squared error (summed over k1 and k2) it chose by.
+///
+/// # Panics
+/// If `accepted` is 0.
+pub fn choose_scale_with_mse(ladder: &[JetPoint], accepted: usize) -> (f64, JetPoint) {
     let lines = bias_lines(ladder);
     let r0 = ladder[0].fit.radius;
     let t = |p: &JetPoint| (p.fit.radius / r0).powi(4);
@@ -247,11 +271,58 @@ pub fn choose_scale(ladder: &[JetPoint], accepted: usize) -> JetPoint {
             best = Some((mse, p));
         }
     }
-    let (_, p) = best.expect("a non-empty ladder");
-    JetPoint {
-        bias: lines.map(|(c2, var)| t(p) * (c2 - var).max(0.0).sqrt()),
-        ..*p
-    }
+    let (mse, p) = best.expect("a non-empty ladder");
+    (
+        mse,
+        JetPoint {
+            bias: lines.map(|(c2, var)| t(p) * (c2 - var).max(0.0).sqrt()),
+            ..*p
+        },
+    )
+}
+
+/// The predicted error below which the degree-2 candidates are not sought: a fraction
+/// [`RESOLVED_RELATIVE`] of the larger |k|, plus [`RESOLVED_ABSOLUTE`]/h (so that a plane is not
+/// asked for relative digits it cannot have).
+pub const RESOLVED_RELATIVE: f64 = 1e-2;
+/// See [`RESOLVED_RELATIVE`].
+pub const RESOLVED_ABSOLUTE: f64 = 1e-4;
+
+/// Whether `p`'s predicted error (√(e1² + e2²)) is already below what a user can see:
+/// [`RESOLVED_RELATIVE`] of max(|k1|, |k2|) plus [`RESOLVED_ABSOLUTE`]/h. On clean and quantized
+/// clouds the degree-4 ladder is there, and the degree-2 candidates (orders less accurate) are
+/// not computed.
+pub fn resolved(p: &JetPoint, h: f64) -> bool {
+    let [e1, e2] = p.predicted_error();
+    let k = p.curvature.k1.abs().max(p.curvature.k2.abs());
+    e1.hypot(e2) <= RESOLVED_RELATIVE * k + RESOLVED_ABSOLUTE / h
+}
+
+/// The degree-2 candidate of a fit with its predicted [`Leak`], and the estimated mean squared
+/// error (summed over k1 and k2) to choose it by: `sd² + max(b² − var b, 0)` per principal
+/// curvature, `b` the leak's effect on it and `var b` that effect's variance (`E b² = bias² +
+/// var b`). The candidate carries `√max(b² − var b, 0)` as its bias. The leak is not
+/// subtracted: the high terms of one degree-4 fit are too uncertain, and where they are certain
+/// the degree-4 fit itself wins.
+pub fn quadratic_candidate(
+    x: &Point,
+    frame: &(Vector, Vector, Vector),
+    fit: &JetFit,
+    leak: &Leak,
+) -> Option<(f64, JetPoint)> {
+    let p = jet_curvature(x, frame, fit).ok()?;
+    let (t1, t2, n) = frame;
+    let len = (n - t1 * fit.coefficients[A10] - t2 * fit.coefficients[A01]).norm();
+    // δk = −2(c² δa20 + cs δa11 + s² δa02)/|∇F| along each principal direction.
+    let bias = [p.curvature.d1, p.curvature.d2].map(|d| {
+        let (cs, sn) = (d.dot(t1), d.dot(t2));
+        let g = Vector::new(cs * cs, cs * sn, sn * sn) * (-2.0 / len);
+        let (b, v) = (g.dot(&leak.bias), g.dot(&(leak.covariance * g)).max(0.0));
+        (b * b - v).max(0.0).sqrt()
+    });
+    let point = JetPoint { bias, ..p };
+    let [e1, e2] = point.predicted_error();
+    Some((e1 * e1 + e2 * e2, point))
 }
 
 /// `(c², var c)` of the weighted line `k_j = k* + c (ρ_j/ρ_0)⁴` through the ladder, for k1 and

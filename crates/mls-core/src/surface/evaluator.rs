@@ -6,7 +6,7 @@
 use super::{CLUSTER, Hits, MlsSurface, PointResult, SurfacePoint};
 use crate::curvature::curvature;
 use crate::field::{FieldScratch, Implicit, Sample, evaluate, evaluate_loaded};
-use crate::jet::{self, JetConfig, JetPoint};
+use crate::jet::{self, JetConfig, JetPoint, NormalData};
 use crate::kernels::LineBlock;
 use crate::math::{Point, UnitNormal, Vector};
 use crate::projection::line_minimum;
@@ -30,6 +30,7 @@ impl MlsSurface {
             line: Vec::new(),
             ladder: Vec::new(),
             jet_scratch: jet::JetScratch::default(),
+            quadratic_scratch: jet::QuadraticScratch::default(),
         }
     }
 }
@@ -50,6 +51,7 @@ pub struct Evaluator<'a> {
     /// The jet's fits up the ladder of scales at one query.
     ladder: Vec<JetPoint>,
     jet_scratch: jet::JetScratch,
+    quadratic_scratch: jet::QuadraticScratch,
 }
 
 impl Evaluator<'_> {
@@ -217,7 +219,86 @@ impl Evaluator<'_> {
                 accepted += 1;
             }
         }
-        Ok(jet::choose_scale(&self.ladder, accepted))
+        let (mse, chosen) = jet::choose_scale_with_mse(&self.ladder, accepted);
+        match frame {
+            // The degree-2 candidates, also where the ladder stopped on its bias (under noise a
+            // wild small-support fit can stop it there), but not where the ladder's predicted
+            // error is already below what matters (clean and quantized data).
+            Some(Some(frame))
+                if config.quadratic
+                    && config.normals == NormalData::Ignore
+                    && !jet::resolved(&chosen, h) =>
+            {
+                Ok(self
+                .quadratic_at(x, &local, &frame, h)
+                    .filter(|(m, _)| *m < mse)
+                    .map_or(chosen, |(_, p)| p))
+            }
+            _ => Ok(chosen),
+        }
+    }
+
+    /// The degree-2 candidate of least estimated squared error at `x` (`local` in the
+    /// internal frame), over the supports of [`jet::QUADRATIC_RADIUS`] and after, each with the
+    /// leak of the cubic and quartic terms predicted from a degree-4 fit on the largest.
+    fn quadratic_at(
+        &mut self,
+        x: &Point,
+        local: &Point,
+        frame: &(Vector, Vector, Vector),
+        h: f64,
+    ) -> Option<(f64, JetPoint)> {
+        let radii: Vec<f64> = (0..jet::QUADRATIC_SCALES)
+            .map(|j| jet::QUADRATIC_RADIUS * h * std::f64::consts::SQRT_2.powi(j as i32))
+            .collect();
+        let top = *radii.last()?;
+        self.support.clear();
+        self.surface
+            .index
+            .samples_within_ordered(local, top, &mut self.hits, &mut self.support);
+        // The largest support within the sample budget (the first in any case).
+        let mut counts = vec![0usize; radii.len()];
+        for s in &self.support {
+            let d2 = (s.point - local).norm_squared();
+            for (c, r) in counts.iter_mut().zip(&radii) {
+                *c += usize::from(d2 <= r * r);
+            }
+        }
+        let last = counts
+            .iter()
+            .rposition(|&c| c <= jet::QUADRATIC_MAX_SAMPLES)
+            .unwrap_or(0);
+        let mut fits = Vec::with_capacity(last + 1);
+        for &r in &radii[..=last] {
+            fits.push(jet::quadratic(
+                &self.support,
+                local,
+                frame,
+                r,
+                &mut self.quadratic_scratch,
+            ));
+        }
+        // The terms beside the circles of the largest support's own fit.
+        let (top, _) = fits[last]?;
+        let a = &top.coefficients;
+        let high = jet::high_terms(
+            &self.support,
+            local,
+            frame,
+            radii[last],
+            &[a[3], a[4], a[5]],
+            &mut self.quadratic_scratch,
+        )?;
+        let mut best: Option<(f64, JetPoint)> = None;
+        for (fit, sensitivity) in fits.into_iter().flatten() {
+            let leak = sensitivity.leak(&high);
+            if let Some((m, p)) = jet::quadratic_candidate(x, frame, &fit, &leak)
+                && best.as_ref().is_none_or(|(b, _)| m < *b)
+            {
+                best = Some((m, p));
+            }
+        }
+        best
     }
 
     /// The λ the ladder's first fit found, for the fits after it; none where that fit had no

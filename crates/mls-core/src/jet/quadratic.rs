@@ -1,0 +1,384 @@
+//! Degree-2 candidates beside the degree-4 ladder, for noisy heights without usable normals.
+//!
+//! Under position noise a degree-4 fit's curvature scatters several times more than a degree-2
+//! fit's on the same support, and the degree-2 fit's truncation bias (the surface's cubic and
+//! quartic terms, leaking into its quadratic coefficients) is what limits it. That leak is
+//! linear in the omitted terms: with `M` the weighted normal matrix split into the fitted
+//! monomials `L` (degree ≤ 2) and the omitted ones `H` (degrees 3 and 4), the degree-2
+//! coefficients have the expectation
+//!
+//! $$ E\,\hat c_L = c_L + M_{LL}^{-1} M_{LH}\, c_H $$
+//!
+//! (the omitted-variable bias of least squares). `c_H` comes from one degree-4 fit on the
+//! largest degree-2 support, where its scatter is least, with its covariance; each degree-2
+//! candidate then carries its predicted bias and that bias's own variance, and joins the
+//! degree-4 ladder's candidates in the choice of least estimated mean squared error
+//! (`docs/derivation.md`, "Degree").
+
+use crate::field::Sample;
+use crate::math::{Matrix, Point, Vector};
+
+use super::JetFit;
+use super::algebra::{Factor, Square};
+
+/// The cubic and quartic coefficients of a degree-4 fit (the monomials 6..15 of
+/// [`super::MONOMIALS`]), in file units, with their covariance.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct HighTerms {
+    /// `a_ij` of `u^i v^j`, `i + j ∈ {3, 4}`.
+    pub coefficients: [f64; 9],
+    /// Their estimated covariance.
+    pub covariance: [[f64; 9]; 9],
+}
+
+/// The predicted truncation bias of a degree-2 fit's `(a20, a11, a02)`, file units, with its
+/// covariance (from that of the [`HighTerms`] it was computed from).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Leak {
+    pub bias: Vector,
+    pub covariance: Matrix,
+}
+
+/// One sample in scaled local coordinates with its weight.
+#[derive(Clone, Copy, Debug)]
+struct Local {
+    u: f64,
+    v: f64,
+    z: f64,
+    w: f64,
+}
+
+/// Reusable storage for the fits of this module.
+#[derive(Debug, Default)]
+pub struct QuadraticScratch {
+    locals: Vec<Local>,
+}
+
+/// Samples within `radius` of `centre` whose normal faces the frame, as [`super::fit`] takes
+/// them, in scaled coordinates.
+fn local_samples(
+    samples: &[Sample],
+    centre: &Point,
+    frame: &(Vector, Vector, Vector),
+    radius: f64,
+    locals: &mut Vec<Local>,
+) {
+    let (t1, t2, n) = frame;
+    let inv_r2 = 1.0 / (radius * radius);
+    locals.clear();
+    for sample in samples {
+        let d = sample.point - centre;
+        let s = d.norm_squared() * inv_r2;
+        if !(s < 1.0) || !(sample.normal.dot(n) > 0.0) {
+            continue;
+        }
+        locals.push(Local {
+            u: d.dot(t1) / radius,
+            v: d.dot(t2) / radius,
+            z: d.dot(n) / radius,
+            w: (1.0 - s) * (1.0 - s) * (1.0 - s),
+        });
+    }
+}
+
+/// Exponents of the 15 monomials of degree ≤ 4 ([`super::MONOMIALS`]).
+const EXP: [(i32, i32); 15] = super::MONOMIALS;
+
+/// Index of `u^p v^q` among the monomials ordered by total degree, then by the power of v.
+const fn moment(p: i32, q: i32) -> usize {
+    let d = (p + q) as usize;
+    d * (d + 1) / 2 + q as usize
+}
+
+/// The exponents `(p, q)` of the monomials of degree ≤ 8 in the order of [`moment`].
+const EXPONENTS: [(usize, usize); 45] = {
+    let mut t = [(0, 0); 45];
+    let mut d = 0;
+    while d <= 8 {
+        let mut q = 0;
+        while q <= d {
+            t[d * (d + 1) / 2 + q] = (d - q, q);
+            q += 1;
+        }
+        d += 1;
+    }
+    t
+};
+
+/// The first `K` monomials `u^p v^q` in the order of [`moment`] (degree ≤ 8 for `K` = 45).
+#[inline]
+fn powers<const K: usize>(u: f64, v: f64) -> [f64; K] {
+    let (mut up, mut vp) = ([1.0; 9], [1.0; 9]);
+    for i in 1..9 {
+        up[i] = up[i - 1] * u;
+        vp[i] = vp[i - 1] * v;
+    }
+    let mut out = [0.0; K];
+    for (x, &(p, q)) in out.iter_mut().zip(&EXPONENTS) {
+        *x = up[p] * vp[q];
+    }
+    out
+}
+
+/// The entry `(a, b)` of a normal matrix over the monomials of [`EXP`]: the moment of their
+/// product.
+const fn product(a: usize, b: usize) -> usize {
+    moment(EXP[a].0 + EXP[b].0, EXP[a].1 + EXP[b].1)
+}
+
+/// A heights-only fit of degree 4 at `radius` to the heights less the circles' quartic part of
+/// `circle` (`a20, a11, a02` in file units), for the cubic and quartic terms left; `None`
+/// where the support does not determine degree 4.
+pub fn high_terms(
+    samples: &[Sample],
+    centre: &Point,
+    frame: &(Vector, Vector, Vector),
+    radius: f64,
+    circle: &[f64; 3],
+    scratch: &mut QuadraticScratch,
+) -> Option<HighTerms> {
+    local_samples(samples, centre, frame, radius, &mut scratch.locals);
+    let q = circle.map(|a| a * radius);
+    for l in &mut scratch.locals {
+        l.z -= circle_term(&q, l.u, l.v);
+    }
+    let locals = &scratch.locals;
+    if (locals.len() as f64) < super::MIN_EQUATIONS_PER_COEFFICIENT * 15.0 {
+        return None;
+    }
+    let (mut h, mut h2, mut hz) = ([0.0; 45], [0.0; 45], [0.0; 15]);
+    let mut weight = 0.0;
+    for l in locals {
+        let p = powers::<45>(l.u, l.v);
+        let (w, w2, wz) = (l.w, l.w * l.w, l.w * l.z);
+        for k in 0..45 {
+            h[k] += w * p[k];
+            h2[k] += w2 * p[k];
+        }
+        for k in 0..15 {
+            hz[k] += wz * p[k];
+        }
+        weight += w;
+    }
+    let (mut m, mut m2) = ([[0.0; 15]; 15], [[0.0; 15]; 15]);
+    for a in 0..15 {
+        for b in 0..15 {
+            m[a][b] = h[product(a, b)];
+            m2[a][b] = h2[product(a, b)];
+        }
+    }
+    let (c, inv) = solve(&m, &hz)?;
+    let rss: f64 = locals
+        .iter()
+        .map(|l| {
+            let p = powers::<15>(l.u, l.v);
+            let r = l.z - dot(&c, &p);
+            l.w * r * r
+        })
+        .sum();
+    let dof = weight - super::algebra::trace_product(&inv, &m2);
+    if !(dof > 0.0) {
+        return None;
+    }
+    let var = rss / dof;
+    // Covariance of the scaled coefficients: σ̂² M⁻¹ M₂ M⁻¹, the rows and columns 6..15.
+    let mut left = [[0.0; 15]; 9];
+    for (a, row) in left.iter_mut().enumerate() {
+        for (b, x) in row.iter_mut().enumerate() {
+            *x = (0..15).map(|k| inv[a + 6][k] * m2[k][b]).sum();
+        }
+    }
+    let mut covariance = [[0.0; 9]; 9];
+    // Scaled c_ij = a_ij ρ^(i+j−1): a = c ρ^(1−i−j).
+    let unscale = |k: usize| radius.powi(1 - EXP[k].0 - EXP[k].1);
+    for a in 0..9 {
+        for b in 0..9 {
+            let s: f64 = (0..15).map(|k| left[a][k] * inv[k][b + 6]).sum();
+            covariance[a][b] = var * s * unscale(a + 6) * unscale(b + 6);
+        }
+    }
+    let mut coefficients = [0.0; 9];
+    for (k, x) in coefficients.iter_mut().enumerate() {
+        *x = c[k + 6] * unscale(k + 6);
+    }
+    Some(HighTerms {
+        coefficients,
+        covariance,
+    })
+}
+
+/// A degree-2 fit's sensitivity to the omitted terms: `(a20, a11, a02)` move by `S a_H` for
+/// cubic and quartic coefficients `a_H` (file units).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sensitivity(pub [[f64; 9]; 3]);
+
+impl Sensitivity {
+    /// The leak of `high` into the fit's curvature coefficients.
+    pub fn leak(&self, high: &HighTerms) -> Leak {
+        let s = &self.0;
+        let mut bias = Vector::zeros();
+        let mut covariance = Matrix::zeros();
+        for a in 0..3 {
+            bias[a] = (0..9).map(|b| s[a][b] * high.coefficients[b]).sum();
+            for b in 0..3 {
+                covariance[(a, b)] = (0..9)
+                    .map(|i| s[a][i] * (0..9).map(|j| high.covariance[i][j] * s[b][j]).sum::<f64>())
+                    .sum();
+            }
+        }
+        Leak { bias, covariance }
+    }
+}
+
+/// A heights-only fit of degree 2 at `radius` to the heights less its own circles' quartic
+/// part ([`circle_term`], refitted [`CIRCLE_ROUNDS`] times), with its sensitivity to the
+/// terms it omits; `None` where the support does not determine degree 2.
+pub fn quadratic(
+    samples: &[Sample],
+    centre: &Point,
+    frame: &(Vector, Vector, Vector),
+    radius: f64,
+    scratch: &mut QuadraticScratch,
+) -> Option<(JetFit, Sensitivity)> {
+    local_samples(samples, centre, frame, radius, &mut scratch.locals);
+    let locals = &scratch.locals;
+    if (locals.len() as f64) < super::MIN_EQUATIONS_PER_COEFFICIENT * 6.0 {
+        return None;
+    }
+    // Moments: Σω φ to degree 6 (the matrix and its cross terms with degrees 3 and 4), Σω² φ
+    // to degree 4, Σωz φ to degree 2.
+    let (mut h, mut h2, mut hz) = ([0.0; 28], [0.0; 15], [0.0; 6]);
+    let mut weight = 0.0;
+    for l in locals {
+        let p = powers::<28>(l.u, l.v);
+        let (w, w2, wz) = (l.w, l.w * l.w, l.w * l.z);
+        for k in 0..28 {
+            h[k] += w * p[k];
+        }
+        for k in 0..15 {
+            h2[k] += w2 * p[k];
+        }
+        for k in 0..6 {
+            hz[k] += wz * p[k];
+        }
+        weight += w;
+    }
+    let (mut m, mut m2) = ([[0.0; 6]; 6], [[0.0; 6]; 6]);
+    let mut cross = [[0.0; 9]; 6];
+    for a in 0..6 {
+        for b in 0..6 {
+            m[a][b] = h[product(a, b)];
+            m2[a][b] = h2[product(a, b)];
+        }
+        for b in 0..9 {
+            cross[a][b] = h[product(a, b + 6)];
+        }
+    }
+    let (mut c, inv) = solve(&m, &hz)?;
+    // The circles' quartic part, from the fit's own quadratic, refitted (it is O(κ³ρ⁴): a few
+    // rounds converge).
+    for _ in 0..CIRCLE_ROUNDS {
+        let q = [c[3], c[4], c[5]];
+        let mut r = hz;
+        for l in locals {
+            let t = l.w * circle_term(&q, l.u, l.v);
+            let p = powers::<6>(l.u, l.v);
+            for a in 0..6 {
+                r[a] -= t * p[a];
+            }
+        }
+        c = [0.0; 15];
+        for a in 0..6 {
+            c[a] = (0..6).map(|b| inv[a][b] * r[b]).sum();
+        }
+    }
+    let q = [c[3], c[4], c[5]];
+    let rss: f64 = locals
+        .iter()
+        .map(|l| {
+            let mut p = [0.0; 15];
+            p[..6].copy_from_slice(&powers::<6>(l.u, l.v));
+            let r = l.z - circle_term(&q, l.u, l.v) - dot(&c, &p);
+            l.w * r * r
+        })
+        .sum();
+    let dof = weight - super::algebra::trace_product(&inv, &m2);
+    if !(dof > 0.0) {
+        return None;
+    }
+    let var = rss / dof;
+    // Rows 3..6 of M⁻¹ (c20, c11, c02).
+    let sel = |a: usize, k: usize| inv[a + 3][k];
+    let mut cov = Matrix::zeros();
+    for a in 0..3 {
+        for b in 0..3 {
+            let s: f64 = (0..6)
+                .map(|k| sel(a, k) * (0..6).map(|j| m2[k][j] * sel(b, j)).sum::<f64>())
+                .sum();
+            cov[(a, b)] = var * s;
+        }
+    }
+    // d(scaled c_L)/d(scaled c_H) = M⁻¹ M_LH; scaled c_H = a_H ρ^(i+j−1), (a20, …) = c/ρ.
+    let scale = |k: usize| radius.powi(EXP[k].0 + EXP[k].1 - 1);
+    let mut s = [[0.0; 9]; 3];
+    for (a, row) in s.iter_mut().enumerate() {
+        for (b, x) in row.iter_mut().enumerate() {
+            *x = (0..6).map(|k| sel(a, k) * cross[k][b]).sum::<f64>() * scale(b + 6) / radius;
+        }
+    }
+    let mut coefficients = [0.0; 15];
+    for k in 0..6 {
+        coefficients[k] = c[k] * radius.powi(1 - EXP[k].0 - EXP[k].1);
+    }
+    Some((
+        JetFit {
+            degree: 2,
+            radius,
+            neighbours: locals.len(),
+            equations: locals.len(),
+            coefficients,
+            noise: var.sqrt() * radius,
+            covariance: cov / (radius * radius),
+            slope_weight: 0.0,
+        },
+        Sensitivity(s),
+    ))
+}
+
+/// Rounds of the circles' correction after the plain fit.
+const CIRCLE_ROUNDS: usize = 3;
+
+/// The quartic part `q³/r²` of the normal sections' osculating circles, for the quadratic
+/// height `q = c20 u² + c11 uv + c02 v²` (coefficients `q`): along a direction of normal
+/// curvature κ the circle is `z = κr²/2 + κ³r⁴/8 + …`, and `κ³r⁴/8 = (κr²/2)³/r²`.
+#[inline]
+fn circle_term(q: &[f64; 3], u: f64, v: f64) -> f64 {
+    let r2 = u * u + v * v;
+    if r2 > 0.0 {
+        let z2 = q[0] * u * u + q[1] * u * v + q[2] * v * v;
+        z2 * z2 * z2 / r2
+    } else {
+        0.0
+    }
+}
+
+/// Solution and inverse of the symmetric system `m c = rhs`; `None` where the Cholesky
+/// factor's pivot test finds the basis undetermined.
+fn solve<const N: usize>(m: &Square<N>, rhs: &[f64; N]) -> Option<([f64; 15], Square<N>)> {
+    let mut factor = Factor {
+        l: *m,
+        inv_diag: [0.0; N],
+    };
+    if !factor.factor() {
+        return None;
+    }
+    let mut inv = [[0.0; N]; N];
+    factor.inverse(&mut inv);
+    let mut c = [0.0; 15];
+    c[..N].copy_from_slice(&factor.solve(rhs));
+    Some((c, inv))
+}
+
+fn dot(c: &[f64; 15], p: &[f64; 15]) -> f64 {
+    c.iter().zip(p).map(|(c, p)| c * p).sum()
+}
