@@ -230,7 +230,7 @@ impl Evaluator<'_> {
                     && !jet::resolved(&chosen, h) =>
             {
                 Ok(self
-                .quadratic_at(x, &local, &frame, h)
+                    .quadratic_at(x, &local, &frame, h)
                     .filter(|(m, _)| *m < mse)
                     .map_or(chosen, |(_, p)| p))
             }
