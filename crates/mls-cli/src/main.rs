@@ -34,6 +34,7 @@ Status codes (column `status`):
   5  projection_failed          MLS projection found no energy minimum or did not converge
   6  invalid_query              query point has a non-finite coordinate
   7  normal_estimation_failed   normal could not be estimated (degenerate neighbourhood)
+  8  outlier                    far off the surface fitted to its neighbours (a stray sample)
 Numbers of a point with a non-zero status are NaN.
 
 Sign convention: curvature is positive where the surface bends away from the oriented normal

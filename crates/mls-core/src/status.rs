@@ -23,11 +23,15 @@ pub enum PointStatus {
     /// The input normal of this point could not be estimated (degenerate neighbourhood:
     /// too few or collinear neighbours).
     NormalEstimationFailed = 7,
+    /// The point lies farther from the surface fitted to its neighbours than their residuals
+    /// allow (beyond Tukey's cutoff, 4.685 robust standard deviations): a stray sample, not a
+    /// sample of the surface (the jet without file normals).
+    Outlier = 8,
 }
 
 impl PointStatus {
     /// Every status, for documentation and summaries.
-    pub const ALL: [PointStatus; 7] = [
+    pub const ALL: [PointStatus; 8] = [
         Self::NoNeighbours,
         Self::TooFewNeighbours,
         Self::NormalUndefined,
@@ -35,6 +39,7 @@ impl PointStatus {
         Self::ProjectionFailed,
         Self::InvalidQuery,
         Self::NormalEstimationFailed,
+        Self::Outlier,
     ];
 
     /// The stable numeric code written to files (never 0).
@@ -52,6 +57,7 @@ impl PointStatus {
             Self::ProjectionFailed => "projection_failed",
             Self::InvalidQuery => "invalid_query",
             Self::NormalEstimationFailed => "normal_estimation_failed",
+            Self::Outlier => "outlier",
         }
     }
 
@@ -67,6 +73,7 @@ impl PointStatus {
             Self::NormalEstimationFailed => {
                 "normal could not be estimated (degenerate neighbourhood)"
             }
+            Self::Outlier => "far off the surface fitted to its neighbours (a stray sample)",
         }
     }
 }

@@ -48,7 +48,11 @@ mod quadratic;
 
 pub(crate) use fit::jet_fit;
 pub use fit::{JetScratch, fit};
-pub use quadratic::{HighTerms, Leak, QuadraticScratch, Sensitivity, high_terms, quadratic};
+pub use quadratic::{
+    BIWEIGHT_CUTOFF, HighTerms, Leak, QuadraticFit, QuadraticScratch, Sensitivity, high_terms,
+    quadratic,
+    robust_weights,
+};
 
 /// Exponents `(i, j)` of the monomials `u^i v^j`, by total degree: the first
 /// `(d + 1)(d + 2)/2` are the basis of degree `d`.

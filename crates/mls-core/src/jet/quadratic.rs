@@ -52,6 +52,7 @@ struct Local {
 #[derive(Debug, Default)]
 pub struct QuadraticScratch {
     locals: Vec<Local>,
+    residuals: Vec<f64>,
 }
 
 /// Samples within `radius` of `centre` whose normal faces the frame, as [`super::fit`] takes
@@ -61,24 +62,87 @@ fn local_samples(
     centre: &Point,
     frame: &(Vector, Vector, Vector),
     radius: f64,
+    robust: Option<&[f64]>,
     locals: &mut Vec<Local>,
 ) {
     let (t1, t2, n) = frame;
     let inv_r2 = 1.0 / (radius * radius);
     locals.clear();
-    for sample in samples {
+    for (i, sample) in samples.iter().enumerate() {
         let d = sample.point - centre;
         let s = d.norm_squared() * inv_r2;
-        if !(s < 1.0) || !(sample.normal.dot(n) > 0.0) {
+        let tau = robust.map_or(1.0, |r| r[i]);
+        if !(s < 1.0) || !(sample.normal.dot(n) > 0.0) || !(tau > 0.0) {
             continue;
         }
         locals.push(Local {
             u: d.dot(t1) / radius,
             v: d.dot(t2) / radius,
             z: d.dot(n) / radius,
-            w: (1.0 - s) * (1.0 - s) * (1.0 - s),
+            w: (1.0 - s) * (1.0 - s) * (1.0 - s) * tau,
         });
     }
+}
+
+/// Tukey's biweight cutoff in robust standard deviations (95 % efficiency under Gaussian
+/// noise).
+pub const BIWEIGHT_CUTOFF: f64 = 4.685;
+
+/// Robust weights of `samples` (index by index) from their residuals to `fit` (a degree-2 fit
+/// at `fit.radius` about `centre`, with its circles): Tukey's biweight `(1 − (r/cs)²)²`,
+/// `s = 1.4826 · median |r|` over the samples the fit took, `c` = [`BIWEIGHT_CUTOFF`]; 1 for
+/// the samples outside the fit's support, and for all where `s` is 0 (exact data). Returns the
+/// cutoff `cs` (file units; 0 on exact data).
+pub fn robust_weights(
+    samples: &[Sample],
+    centre: &Point,
+    frame: &(Vector, Vector, Vector),
+    fit: &JetFit,
+    out: &mut Vec<f64>,
+    scratch: &mut QuadraticScratch,
+) -> f64 {
+    let (t1, t2, n) = frame;
+    let a = &fit.coefficients;
+    let r2 = fit.radius * fit.radius;
+    let q = [a[3], a[4], a[5]];
+    out.clear();
+    let residual = |sample: &Sample| -> Option<f64> {
+        let d = sample.point - centre;
+        if !(d.norm_squared() < r2) || !(sample.normal.dot(n) > 0.0) {
+            return None;
+        }
+        let (u, v, z) = (d.dot(t1), d.dot(t2), d.dot(n));
+        Some(
+            z - a[0] - a[1] * u - a[2] * v - a[3] * u * u - a[4] * u * v - a[5] * v * v
+                - circle_term(&q, u, v),
+        )
+    };
+    out.extend(samples.iter().map(|s| residual(s).unwrap_or(f64::NAN)));
+    let abs = &mut scratch.residuals;
+    abs.clear();
+    abs.extend(out.iter().filter(|r| r.is_finite()).map(|r| r.abs()));
+    let scale = if abs.is_empty() {
+        0.0
+    } else {
+        let mid = abs.len() / 2;
+        let (_, m, _) = abs.select_nth_unstable_by(mid, f64::total_cmp);
+        1.4826 * *m
+    };
+    let cut = BIWEIGHT_CUTOFF * scale;
+    for r in out.iter_mut() {
+        *r = if r.is_finite() && cut > 0.0 {
+            let x = *r / cut;
+            if x.abs() < 1.0 {
+                let y = 1.0 - x * x;
+                y * y
+            } else {
+                0.0
+            }
+        } else {
+            1.0
+        };
+    }
+    cut
 }
 
 /// Exponents of the 15 monomials of degree ≤ 4 ([`super::MONOMIALS`]).
@@ -135,9 +199,10 @@ pub fn high_terms(
     frame: &(Vector, Vector, Vector),
     radius: f64,
     circle: &[f64; 3],
+    robust: Option<&[f64]>,
     scratch: &mut QuadraticScratch,
 ) -> Option<HighTerms> {
-    local_samples(samples, centre, frame, radius, &mut scratch.locals);
+    local_samples(samples, centre, frame, radius, robust, &mut scratch.locals);
     let q = circle.map(|a| a * radius);
     for l in &mut scratch.locals {
         l.z -= circle_term(&q, l.u, l.v);
@@ -238,9 +303,10 @@ pub fn quadratic(
     centre: &Point,
     frame: &(Vector, Vector, Vector),
     radius: f64,
+    robust: Option<&[f64]>,
     scratch: &mut QuadraticScratch,
-) -> Option<(JetFit, Sensitivity)> {
-    local_samples(samples, centre, frame, radius, &mut scratch.locals);
+) -> Option<QuadraticFit> {
+    local_samples(samples, centre, frame, radius, robust, &mut scratch.locals);
     let locals = &scratch.locals;
     if (locals.len() as f64) < super::MIN_EQUATIONS_PER_COEFFICIENT * 6.0 {
         return None;
@@ -276,23 +342,42 @@ pub fn quadratic(
     }
     let (mut c, inv) = solve(&m, &hz)?;
     // The circles' quartic part, from the fit's own quadratic, refitted (it is O(κ³ρ⁴): a few
-    // rounds converge).
-    for _ in 0..CIRCLE_ROUNDS {
-        let q = [c[3], c[4], c[5]];
-        let mut r = hz;
-        for l in locals {
-            let t = l.w * circle_term(&q, l.u, l.v);
-            let p = powers::<6>(l.u, l.v);
-            for a in 0..6 {
-                r[a] -= t * p[a];
+    // rounds converge) while the rounds contract, every scaled normal curvature |κρ| ≤ 2 and
+    // the frame within 45° of the fit's normal. Else (a frame far off the surface, a fold,
+    // a support wider than the curvature allows) the plain fit.
+    let plain = c;
+    let mut circled = circles_hold(&c);
+    // The change of the quadratic part in the last round: the rounds must contract.
+    let mut step = f64::INFINITY;
+    if circled {
+        for _ in 0..CIRCLE_ROUNDS {
+            let before = [c[3], c[4], c[5]];
+            let q = [c[3], c[4], c[5]];
+            let mut r = hz;
+            for l in locals {
+                let t = l.w * circle_term(&q, l.u, l.v);
+                let p = powers::<6>(l.u, l.v);
+                for a in 0..6 {
+                    r[a] -= t * p[a];
+                }
             }
-        }
-        c = [0.0; 15];
-        for a in 0..6 {
-            c[a] = (0..6).map(|b| inv[a][b] * r[b]).sum();
+            c = [0.0; 15];
+            for a in 0..6 {
+                c[a] = (0..6).map(|b| inv[a][b] * r[b]).sum();
+            }
+            let change = (0..3).fold(0.0f64, |m, k| m.max((c[k + 3] - before[k]).abs()));
+            if !circles_hold(&c) || !(change <= step) {
+                (c, circled) = (plain, false);
+                break;
+            }
+            step = change;
         }
     }
-    let q = [c[3], c[4], c[5]];
+    let q = if circled {
+        [c[3], c[4], c[5]]
+    } else {
+        [0.0; 3]
+    };
     let rss: f64 = locals
         .iter()
         .map(|l| {
@@ -330,8 +415,8 @@ pub fn quadratic(
     for k in 0..6 {
         coefficients[k] = c[k] * radius.powi(1 - EXP[k].0 - EXP[k].1);
     }
-    Some((
-        JetFit {
+    Some(QuadraticFit {
+        fit: JetFit {
             degree: 2,
             radius,
             neighbours: locals.len(),
@@ -341,8 +426,28 @@ pub fn quadratic(
             covariance: cov / (radius * radius),
             slope_weight: 0.0,
         },
-        Sensitivity(s),
-    ))
+        sensitivity: Sensitivity(s),
+        circles: q.map(|x| x / radius),
+    })
+}
+
+/// Whether the circles' correction applies to the scaled coefficients `c`: the quadratic
+/// part's normal curvatures `|κρ| ≤ 2` (`2(max(|c20|, |c02|) + |c11|/2)` bounds them) and the
+/// slope `c10² + c01² ≤ 1`.
+fn circles_hold(c: &[f64; 15]) -> bool {
+    c[3].abs().max(c[5].abs()) + 0.5 * c[4].abs() <= 1.0 && c[1] * c[1] + c[2] * c[2] <= 1.0
+}
+
+/// A degree-2 fit with what the candidates and the high terms need of it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct QuadraticFit {
+    /// The fit (its coefficients with the circles' part removed from the heights).
+    pub fit: JetFit,
+    /// Its sensitivity to the omitted cubic and quartic terms.
+    pub sensitivity: Sensitivity,
+    /// The quadratic `(a20, a11, a02)` (file units) whose circles were subtracted; zeros where
+    /// the circles' series does not hold and the fit is plain.
+    pub circles: [f64; 3],
 }
 
 /// Rounds of the circles' correction after the plain fit.

@@ -31,6 +31,7 @@ impl MlsSurface {
             ladder: Vec::new(),
             jet_scratch: jet::JetScratch::default(),
             quadratic_scratch: jet::QuadraticScratch::default(),
+            robust: Vec::new(),
         }
     }
 }
@@ -52,6 +53,8 @@ pub struct Evaluator<'a> {
     ladder: Vec<JetPoint>,
     jet_scratch: jet::JetScratch,
     quadratic_scratch: jet::QuadraticScratch,
+    /// Robust weights of the degree-2 candidates' support, sample by sample.
+    robust: Vec<f64>,
 }
 
 impl Evaluator<'_> {
@@ -198,28 +201,31 @@ impl Evaluator<'_> {
         } else {
             early
         };
-        if accepted == 0 {
-            return fallback.ok_or(failure);
-        }
-        // The lead scale, from the support already gathered (it holds every smaller one), in
-        // one round with the slopes weighted as the ladder's first fit found.
-        if let (Some(lead), Some(Some(frame))) = (config.lead_radius(), frame) {
-            let lead = jet::fit(
-                &self.support,
-                &local,
-                &frame,
-                lead * h,
-                config,
-                self.handed_slope_weight(),
-                &mut self.jet_scratch,
-            )
-            .filter(|f| f.degree == config.degree.clamp(2, 4) && jet::trusted(f));
-            if let Some(Ok(p)) = lead.map(|f| jet::jet_curvature(x, &frame, &f)) {
-                self.ladder.insert(0, p);
-                accepted += 1;
+        // The ladder's choice with its estimated squared error; a lower-degree fallback (no
+        // scale determined the full degree) has none, and any degree-2 candidate replaces it.
+        let ladder = if accepted == 0 {
+            fallback.map(|p| (f64::INFINITY, p)).ok_or(failure)
+        } else {
+            // The lead scale, from the support already gathered (it holds every smaller one),
+            // in one round with the slopes weighted as the ladder's first fit found.
+            if let (Some(lead), Some(Some(frame))) = (config.lead_radius(), frame) {
+                let lead = jet::fit(
+                    &self.support,
+                    &local,
+                    &frame,
+                    lead * h,
+                    config,
+                    self.handed_slope_weight(),
+                    &mut self.jet_scratch,
+                )
+                .filter(|f| f.degree == config.degree.clamp(2, 4) && jet::trusted(f));
+                if let Some(Ok(p)) = lead.map(|f| jet::jet_curvature(x, &frame, &f)) {
+                    self.ladder.insert(0, p);
+                    accepted += 1;
+                }
             }
-        }
-        let (mse, chosen) = jet::choose_scale_with_mse(&self.ladder, accepted);
+            Ok(jet::choose_scale_with_mse(&self.ladder, accepted))
+        };
         match frame {
             // The degree-2 candidates, also where the ladder stopped on its bias (under noise a
             // wild small-support fit can stop it there), but not where the ladder's predicted
@@ -227,31 +233,38 @@ impl Evaluator<'_> {
             Some(Some(frame))
                 if config.quadratic
                     && config.normals == NormalData::Ignore
-                    && !jet::resolved(&chosen, h) =>
+                    && !ladder
+                        .as_ref()
+                        .is_ok_and(|(m, p)| m.is_finite() && jet::resolved(p, h)) =>
             {
-                Ok(self
-                    .quadratic_at(x, &local, &frame, h)
-                    .filter(|(m, _)| *m < mse)
-                    .map_or(chosen, |(_, p)| p))
+                let mse = ladder.as_ref().map_or(f64::INFINITY, |(m, _)| *m);
+                match self.quadratic_at(x, &local, &frame, h)? {
+                    Some((m, p)) if m < mse => Ok(p),
+                    _ => ladder.map(|(_, p)| p),
+                }
             }
-            _ => Ok(chosen),
+            _ => ladder.map(|(_, p)| p),
         }
     }
 
     /// The degree-2 candidate of least estimated squared error at `x` (`local` in the
     /// internal frame), over the supports of [`jet::QUADRATIC_RADIUS`] and after, each with the
-    /// leak of the cubic and quartic terms predicted from a degree-4 fit on the largest.
+    /// leak of the cubic and quartic terms predicted from a degree-4 fit on the largest; `None`
+    /// where none is determined, [`PointStatus::Outlier`] where the query lies beyond the
+    /// robust cutoff of the largest support's plain fit.
     fn quadratic_at(
         &mut self,
         x: &Point,
         local: &Point,
         frame: &(Vector, Vector, Vector),
         h: f64,
-    ) -> Option<(f64, JetPoint)> {
+    ) -> Result<Option<(f64, JetPoint)>, PointStatus> {
         let radii: Vec<f64> = (0..jet::QUADRATIC_SCALES)
             .map(|j| jet::QUADRATIC_RADIUS * h * std::f64::consts::SQRT_2.powi(j as i32))
             .collect();
-        let top = *radii.last()?;
+        let Some(&top) = radii.last() else {
+            return Ok(None);
+        };
         self.support.clear();
         self.surface
             .index
@@ -268,6 +281,48 @@ impl Evaluator<'_> {
             .iter()
             .rposition(|&c| c <= jet::QUADRATIC_MAX_SAMPLES)
             .unwrap_or(0);
+        // The frame turned to the normal of the largest support's plain fit: the ladder's frame
+        // comes from the estimated normals near the query, which a stray query (an outlier
+        // off the surface) or heavy noise may tilt far, and the circles hold in the surface's
+        // own frame.
+        let Some(jet::QuadraticFit { fit: tilted, .. }) = jet::quadratic(
+            &self.support,
+            local,
+            frame,
+            radii[last],
+            None,
+            &mut self.quadratic_scratch,
+        ) else {
+            return Ok(None);
+        };
+        let (t1, t2, n) = frame;
+        let turned = n - t1 * tilted.coefficients[1] - t2 * tilted.coefficients[2];
+        let frame = &jet::frame(&turned.normalize());
+        // Robust weights from the largest support's plain fit: far samples (outliers) weigh
+        // nothing in every fit after it, the query's own included.
+        let Some(jet::QuadraticFit { fit: plain, .. }) = jet::quadratic(
+            &self.support,
+            local,
+            frame,
+            radii[last],
+            None,
+            &mut self.quadratic_scratch,
+        ) else {
+            return Ok(None);
+        };
+        let cut = jet::robust_weights(
+            &self.support,
+            local,
+            frame,
+            &plain,
+            &mut self.robust,
+            &mut self.quadratic_scratch,
+        );
+        // The query sits at the frame's origin: its residual is the fit's height there.
+        if cut > 0.0 && !(plain.coefficients[0].abs() < cut) {
+            return Err(PointStatus::Outlier);
+        }
+        let robust = Some(&self.robust[..]);
         let mut fits = Vec::with_capacity(last + 1);
         for &r in &radii[..=last] {
             fits.push(jet::quadratic(
@@ -275,22 +330,30 @@ impl Evaluator<'_> {
                 local,
                 frame,
                 r,
+                robust,
                 &mut self.quadratic_scratch,
             ));
         }
         // The terms beside the circles of the largest support's own fit.
-        let (top, _) = fits[last]?;
-        let a = &top.coefficients;
-        let high = jet::high_terms(
+        let Some(top) = fits[last] else {
+            return Ok(None);
+        };
+        let Some(high) = jet::high_terms(
             &self.support,
             local,
             frame,
             radii[last],
-            &[a[3], a[4], a[5]],
+            &top.circles,
+            robust,
             &mut self.quadratic_scratch,
-        )?;
+        ) else {
+            return Ok(None);
+        };
         let mut best: Option<(f64, JetPoint)> = None;
-        for (fit, sensitivity) in fits.into_iter().flatten() {
+        for jet::QuadraticFit {
+            fit, sensitivity, ..
+        } in fits.into_iter().flatten()
+        {
             let leak = sensitivity.leak(&high);
             if let Some((m, p)) = jet::quadratic_candidate(x, frame, &fit, &leak)
                 && best.as_ref().is_none_or(|(b, _)| m < *b)
@@ -298,7 +361,7 @@ impl Evaluator<'_> {
                 best = Some((m, p));
             }
         }
-        best
+        Ok(best)
     }
 
     /// The λ the ladder's first fit found, for the fits after it; none where that fit had no
