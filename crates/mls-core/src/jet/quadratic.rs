@@ -89,7 +89,7 @@ fn local_samples(
 pub const BIWEIGHT_CUTOFF: f64 = 4.685;
 
 /// Robust weights of `samples` (index by index) from their residuals to `fit` (a degree-2 fit
-/// at `fit.radius` about `centre`, with its circles): Tukey's biweight `(1 − (r/cs)²)²`,
+/// about `centre`, with its circles): Tukey's biweight `(1 − (r/cs)²)²`,
 /// `s = 1.4826 · median |r|` over the samples the fit took, `c` = [`BIWEIGHT_CUTOFF`]; 1 for
 /// the samples outside the fit's support, and for all where `s` is 0 (exact data). Returns the
 /// cutoff `cs` (file units; 0 on exact data).
@@ -97,14 +97,14 @@ pub fn robust_weights(
     samples: &[Sample],
     centre: &Point,
     frame: &(Vector, Vector, Vector),
-    fit: &JetFit,
+    fit: &QuadraticFit,
     out: &mut Vec<f64>,
     scratch: &mut QuadraticScratch,
 ) -> f64 {
     let (t1, t2, n) = frame;
-    let a = &fit.coefficients;
-    let r2 = fit.radius * fit.radius;
-    let q = [a[3], a[4], a[5]];
+    let a = &fit.fit.coefficients;
+    let r2 = fit.fit.radius * fit.fit.radius;
+    let q = fit.circles;
     out.clear();
     let residual = |sample: &Sample| -> Option<f64> {
         let d = sample.point - centre;

@@ -300,7 +300,7 @@ impl Evaluator<'_> {
         let frame = &jet::frame(&turned.normalize());
         // Robust weights from the largest support's plain fit: far samples (outliers) weigh
         // nothing in every fit after it, the query's own included.
-        let Some(jet::QuadraticFit { fit: plain, .. }) = jet::quadratic(
+        let Some(plain) = jet::quadratic(
             &self.support,
             local,
             frame,
@@ -319,7 +319,7 @@ impl Evaluator<'_> {
             &mut self.quadratic_scratch,
         );
         // The query sits at the frame's origin: its residual is the fit's height there.
-        if cut > 0.0 && !(plain.coefficients[0].abs() < cut) {
+        if cut > 0.0 && !(plain.fit.coefficients[0].abs() < cut) {
             return Err(PointStatus::Outlier);
         }
         let robust = Some(&self.robust[..]);
