@@ -35,9 +35,10 @@ use crate::{
 /// cutoff : float or "none" or None
 ///     Kernel truncated at ``cutoff`` · h (at least 2; default 5), or untruncated.
 /// method : "jet" or "paper"
-///     ``"jet"`` (default): weighted degree-4 fits with the support chosen per point and a
-///     predicted error (``k1_sd``, ``k2_sd``). ``"paper"``: the Amenta–Kil MLS surface in closed
-///     form (Yang & Qian 2007).
+///     ``"jet"`` (default): weighted degree-4 fits, and without normals also degree-2 fits on
+///     larger supports (noisy scans), the degree and support chosen per point, with a
+///     predicted error (``k1_sd``, ``k2_sd``); without normals a stray point gets status 8
+///     (outlier). ``"paper"``: the Amenta–Kil MLS surface in closed form (Yang & Qian 2007).
 /// at : "input" or "projected"
 ///     Evaluate at the input points (default) or at their projections onto the surface.
 /// orient : str, optional
