@@ -50,8 +50,7 @@ pub(crate) use fit::jet_fit;
 pub use fit::{JetScratch, fit};
 pub use quadratic::{
     BIWEIGHT_CUTOFF, HighTerms, Leak, QuadraticFit, QuadraticScratch, Sensitivity, high_terms,
-    quadratic,
-    robust_weights,
+    quadratic, robust_weights,
 };
 
 /// Exponents `(i, j)` of the monomials `u^i v^j`, by total degree: the first

@@ -113,7 +113,12 @@ pub fn robust_weights(
         }
         let (u, v, z) = (d.dot(t1), d.dot(t2), d.dot(n));
         Some(
-            z - a[0] - a[1] * u - a[2] * v - a[3] * u * u - a[4] * u * v - a[5] * v * v
+            z - a[0]
+                - a[1] * u
+                - a[2] * v
+                - a[3] * u * u
+                - a[4] * u * v
+                - a[5] * v * v
                 - circle_term(&q, u, v),
         )
     };
