@@ -222,8 +222,8 @@ struct Worst {
     evals: usize,
 }
 
-/// The jet results of one choice: how many, and their worst differences from the witness in
-/// units of the thresholds of the jet rows.
+/// The jet results of one choice: how many, and their worst differences from the witness (as
+/// in the jet rows).
 #[derive(Clone, Copy, Debug, Default)]
 pub(crate) struct JetChoices {
     count: usize,
@@ -260,7 +260,7 @@ impl Tally {
     }
 
     /// One jet result of `setting` with the choice `chosen`, and its differences from the
-    /// witness (in units of their rows' thresholds) where both sides found it.
+    /// witness (as in the jet rows).
     pub fn jet_choice(&mut self, setting: &'static str, chosen: String, k: f64, error: f64) {
         let c = self.jet_choices.entry((setting, chosen)).or_default();
         c.count += 1;
@@ -367,7 +367,9 @@ pub(crate) fn run(o: &Options) -> Result<()> {
     report.push_str(
         "\nThe jet's choices, per kind of cloud and normal data (heights only, degree 2 at a support \
          ρ of 3h to 8.5h is a degree-2 candidate of `JetConfig::quadratic`, or where no scale \
-         determines degree 4 the ladder's own lower-degree fit):\n\n\
+         determines degree 4 the ladder's own lower-degree fit; a stray sample is one moved \
+         3–10 spacings along the normal, as a query; outlier (status 8) where both sides flag the \
+         query, by kind of query, nothing to compare beyond the status):\n\n\
          | cloud, normal data | chosen | evaluations | worst jet k1, k2 | worst jet predicted error |\n\
          | --- | --- | --- | --- | --- |\n",
     );
@@ -375,9 +377,7 @@ pub(crate) fn run(o: &Options) -> Result<()> {
         writeln!(
             report,
             "| {setting} | {chosen} | {} | {:.2e} | {:.2e} |",
-            c.count,
-            c.k * THRESHOLD,
-            c.error * SD_THRESHOLD
+            c.count, c.k, c.error
         )?;
     }
     report.push_str(NORMALISATION_NOTE);
@@ -426,12 +426,17 @@ normal only as accurate as the eigengap allows) and the variation λ0/Σλ absol
 rows are the worst distance in units in the last place over a dense sweep of arguments.
 
 The jet rows compare `MlsSurface::jet_stream` (in chunks, bitwise `jet_at_points`) with `mls_ad::jet_witness` on the same queries
-(heights only or with slopes, at random). k1, k2 are scaled by κ = max(|k1|, |k2|, 1/h) and
+(heights only or with slopes, at random), and on a noisy patch of each case (a sphere, torus or
+height field with Gaussian position noise of 1e-4 to 0.3 spacings, 1 % of its samples and 2 near
+the centre moved 3–10 spacings along the normal) with heights only, where the degree-2
+candidates are sought and mostly chosen, their robust weights drop the stray samples, and a
+query beyond the robust cutoff is an outlier (the table of choices above; production's status 8
+against the witness's outlier, any disagreement counts as 1 in the support-and-degree row). k1, k2 are scaled by κ = max(|k1|, |k2|, 1/h) and
 divided by max(1, 1e3·ε·cond(M)/threshold), the rounding any least-squares route carries on a
 fit whose normal matrix has condition number cond(M) (up to about 1e10 is admitted); the
 predicted error is scaled by itself, at least 1e3 × its rounding floor 1e-8/ρ, and by the same
 rounding factor. Where the two routes' least estimated errors tie within 1e-4, the production's
-choice is compared with the witness's fit at that scale; the support-and-degree row counts any
+choice is compared with the witness's fit of that degree and scale; the support-and-degree row counts any
 other difference in the chosen scale or degree, or a point only one side could fit, as 1.
 The stream row runs the entry points the CLI runs, `curvature_stream` and `projection_stream`,
 in chunks of 1, 7, all queries or `DEFAULT_CHUNK` (at random per case; the table below names

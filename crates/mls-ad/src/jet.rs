@@ -4,7 +4,8 @@
 //! equations formed from the dense weighted design matrix and
 //! solved by LU (mls-core accumulates them row by row and uses Cholesky), a cluster-robust
 //! covariance from per-sample score vectors, and the curvature of the fitted surface
-//! `F = w − P(u, v)` by hyper-dual differentiation and a 3 × 3 eigen-decomposition.
+//! `F = w − P(u, v)` by hyper-dual differentiation and a 3 × 3 eigen-decomposition. With
+//! heights only, the degree-2 candidates beside the ladder are [`crate::jet_quadratic`]'s.
 
 use mls_core::Sample;
 use nalgebra::{DMatrix, DVector, Matrix3, SVector, Vector3};
@@ -21,9 +22,10 @@ pub struct JetWitness {
     pub k2: f64,
     /// Predicted standard deviations of k1 and k2 (noise part).
     pub sd: [f64; 2],
-    /// Estimated bias of k1 and k2 from the line through the ladder (its unbiased form).
+    /// Estimated bias of k1 and k2 from the line through the ladder (its unbiased form); for a
+    /// degree-2 candidate, from its predicted leak (`√max(b² − var b, 0)`).
     pub bias: [f64; 2],
-    /// Degree fitted.
+    /// Degree fitted (2 for a degree-2 candidate of `JetConfig::quadratic`).
     pub degree: usize,
     /// Support radius chosen.
     pub radius: f64,
@@ -36,8 +38,23 @@ pub struct JetWitness {
     pub slope_weight: f64,
 }
 
+/// Whether the weighted design determines its basis. The test is defined on the Cholesky pivots
+/// of M = AᵀΩA: a pivot² below 1e-10 of the largest diagonal entry, or below 1e-5 of its own
+/// (`DETERMINED_PIVOT`), leaves the basis undetermined.
+pub(crate) fn determined(mm: &DMatrix<f64>) -> bool {
+    let diag_max = (0..mm.nrows()).map(|i| mm[(i, i)]).fold(0.0f64, f64::max);
+    let Some(chol) = nalgebra::Cholesky::new(mm.clone()) else {
+        return false;
+    };
+    let l = chol.l();
+    (0..mm.nrows()).all(|i| {
+        let pivot2 = l[(i, i)] * l[(i, i)];
+        pivot2 > 1e-10 * diag_max && pivot2 > 1e-5 * mm[(i, i)]
+    })
+}
+
 /// The exponents of the degree-`d` basis, by total degree then by the power of v.
-fn exponents(degree: usize) -> Vec<(i32, i32)> {
+pub(crate) fn exponents(degree: usize) -> Vec<(i32, i32)> {
     let mut out = Vec::new();
     for d in 0..=degree as i32 {
         for j in 0..=d {
@@ -134,15 +151,7 @@ fn fit_once(
             b[r] = y * sw;
         }
         let mm = a.transpose() * &a;
-        // The degeneracy test is defined on M = AᵀΩA's Cholesky pivots: a pivot² below 1e-10
-        // of the largest diagonal entry, or below 1e-5 of its own (`DETERMINED_PIVOT`).
-        let diag_max = (0..m).map(|i| mm[(i, i)]).fold(0.0f64, f64::max);
-        let chol = nalgebra::Cholesky::new(mm.clone())?;
-        let l = chol.l();
-        if (0..m).any(|i| {
-            let pivot2 = l[(i, i)] * l[(i, i)];
-            !(pivot2 > 1e-10 * diag_max && pivot2 > 1e-5 * mm[(i, i)])
-        }) {
+        if !determined(&mm) {
             return None;
         }
         // LU of the dense normal equations (nalgebra's SVD lost digits on the worst-conditioned
@@ -246,15 +255,69 @@ fn fitted<D: DualNum<Primitive = f64> + Copy>(
     w - height(u, v, c, ex, rho)
 }
 
-/// Every scale `Evaluator::jet_at` may return at `x` (those the intervals accept), each with
-/// its estimated squared error, from all `samples` of the cloud; or the single lower-degree
-/// fallback, or `None` where no fit exists.
+/// A fit's curvature at its foot point `x + a00 n`.
+pub(crate) struct FootCurvature {
+    pub(crate) foot: Vector3<f64>,
+    /// k1, k2 of `F = w − P(u, v)` by hyper-dual differentiation.
+    pub(crate) k: [f64; 2],
+    /// `g_i = (c², cs, s²)·2/|∇F|`, `(c, s)` principal direction i on `(t1, t2)`: the first
+    /// order change of k_i per change of `(a20, a11, a02)`, with a sign.
+    pub(crate) rows: [Vector3<f64>; 2],
+    /// `√(g_iᵀ cov g_i)`, at least 1e-8/ρ (`SD_FLOOR`).
+    pub(crate) sd: [f64; 2],
+}
+
+/// The curvature of the fit of scaled coefficients `c` (exponents `ex`) at radius `rho`, with
+/// the predicted standard deviations from `cov`, the covariance of the file-unit `(a20, a11,
+/// a02)`.
+pub(crate) fn foot_curvature(
+    x: &Vector3<f64>,
+    frame: &(Vector3<f64>, Vector3<f64>, Vector3<f64>),
+    c: &[f64],
+    ex: &[(i32, i32)],
+    rho: f64,
+    cov: &Matrix3<f64>,
+) -> FootCurvature {
+    let (t1, t2, n) = frame;
+    let foot = x + n * (c[0] * rho);
+    let (_, grad, hess) = hessian(|y| fitted(&y, x, frame, c, ex, rho), &foot);
+    let wc = witness_curvature(&grad, &hess);
+    let rows = [wc.d1, wc.d2].map(|d| {
+        let (cs, sn) = (d.dot(t1), d.dot(t2));
+        Vector3::new(cs * cs, cs * sn, sn * sn) * (2.0 / grad.norm())
+    });
+    let sd = rows.map(|g| (g.dot(&(cov * g))).max(0.0).sqrt().max(1e-8 / rho));
+    FootCurvature {
+        foot,
+        k: [wc.k1, wc.k2],
+        rows,
+        sd,
+    }
+}
+
+/// Why the witness has no jet at a query.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum JetRefusal {
+    /// No fit: too few samples, or none that determines a degree (production returns one of
+    /// its failure statuses; the witness does not tell them apart).
+    NoFit,
+    /// Heights only with `config.quadratic`: the query lies beyond the robust cutoff of the
+    /// largest degree-2 support's plain fit (`PointStatus::Outlier`).
+    Outlier,
+}
+
+/// Every scale `Evaluator::jet_at` may return at `x`, each with its estimated squared error,
+/// from all `samples` of the cloud: those the intervals accept, or the single lower-degree
+/// fallback (its error +∞: any degree-2 candidate replaces it), then with heights only and
+/// `config.quadratic` the degree-2 candidates in increasing radius (where the ladder's choice
+/// is not resolved already). Never empty; [`JetRefusal`] where there is nothing, or where the
+/// degree-2 candidates find the query an outlier.
 pub fn jet_candidates(
     x: &Vector3<f64>,
     samples: &[Sample],
     h: f64,
     config: &mls_core::JetConfig,
-) -> Option<Vec<(f64, JetWitness)>> {
+) -> Result<Vec<(f64, JetWitness)>, JetRefusal> {
     let slopes = config.normals == mls_core::NormalData::Slopes;
     let mut frame: Option<(Vector3<f64>, Vector3<f64>, Vector3<f64>)> = None;
     let mut best: Option<JetWitness> = None;
@@ -343,28 +406,17 @@ pub fn jet_candidates(
         let Some((degree, (c, ex, condition, cov, slope_weight))) = solution else {
             return Some(None);
         };
-        let a00 = c[0] * rho;
-        let foot = x + n * a00;
-        let (_, grad, hess) = hessian(|y| fitted(&y, x, &(t1, t2, n), &c, &ex, rho), &foot);
-        let wc = witness_curvature(&grad, &hess);
-        let sd = [wc.d1, wc.d2].map(|d| {
-            let (cs, sn) = (d.dot(&t1), d.dot(&t2));
-            let g = Vector3::new(cs * cs, cs * sn, sn * sn) * (2.0 / grad.norm());
-            (g.dot(&(cov / (rho * rho) * g)))
-                .max(0.0)
-                .sqrt()
-                .max(1e-8 / rho)
-        });
+        let at = foot_curvature(x, &(t1, t2, n), &c, &ex, rho, &(cov / (rho * rho)));
         Some(Some((
             JetWitness {
-                k1: wc.k1,
-                k2: wc.k2,
-                sd,
+                k1: at.k[0],
+                k2: at.k[1],
+                sd: at.sd,
                 bias: [0.0; 2],
                 condition,
                 degree,
                 radius: rho,
-                foot,
+                foot: at.foot,
                 slope_weight,
             },
             equations,
@@ -417,16 +469,15 @@ pub fn jet_candidates(
             }
         }
     }
+    // No scale accepted: the lower-degree fallback (if any), with an unknown error.
+    let fallback_only = best.is_none() && early == 0;
     if best.is_none() {
-        if early == 0 {
-            return fallback.map(|w| vec![(0.0, w)]);
-        }
         accepted = early;
     }
     // With slopes, the lead scale one √2 step below the first joins the candidates when it
     // has the full degree and 3 equations per coefficient; the climb's frame is kept, and
     // the first fit's λ is used in one round.
-    if slopes && config.lead {
+    if slopes && config.lead && !fallback_only {
         let rho = config.radius / 2f64.sqrt() * h;
         let full = config.degree.clamp(2, 4);
         let given = Some(ladder[0].slope_weight).filter(|&l| l > 0.0);
@@ -471,7 +522,9 @@ pub fn jet_candidates(
         let c = (inv * b)[1];
         (c * c, inv[(1, 1)])
     });
-    Some(
+    let mut candidates: Vec<(f64, JetWitness)> = if fallback_only {
+        fallback.map(|w| (f64::INFINITY, w)).into_iter().collect()
+    } else {
         (0..accepted)
             .map(|j| {
                 let cautious = growth.map(|(c2, var)| (c2 + var).sqrt() * t(&ladder[j]));
@@ -481,18 +534,60 @@ pub fn jet_candidates(
                 let bias = growth.map(|(c2, var)| (c2 - var).max(0.0).sqrt() * t(&ladder[j]));
                 (mse, JetWitness { bias, ..ladder[j] })
             })
-            .collect(),
-    )
+            .collect()
+    };
+    // Heights only: the degree-2 candidates, from the ladder's frame, after the ladder's own,
+    // so that one wins only with a strictly smaller estimated error (the first of equals is
+    // kept); not sought where the ladder's choice is resolved already (`jet::resolved`), but
+    // sought where the ladder has only a fallback or nothing (wherever a frame exists).
+    if !slopes
+        && config.quadratic
+        && let Some(frame) = &frame
+        && !resolved(&candidates, h)
+    {
+        let quadratic = crate::jet_quadratic::quadratic_candidates(x, samples, h, frame)
+            .map_err(|_| JetRefusal::Outlier)?;
+        candidates.extend(quadratic);
+    }
+    if candidates.is_empty() {
+        return Err(JetRefusal::NoFit);
+    }
+    Ok(candidates)
 }
 
-/// The witness of `Evaluator::jet_at` at `x`, from all `samples` of the cloud: the scale of
-/// least estimated squared error among [`jet_candidates`].
+/// Whether the ladder's choice among `candidates` (the first of least estimated error, which
+/// must be finite: a fallback's is not) has a predicted error `|(√(sd1² + b1²), √(sd2² + b2²))|` (its bias in the unbiased form) of at
+/// most 1e-2 of max(|k1|, |k2|) plus 1e-4/h: mls-core's `RESOLVED_RELATIVE` and
+/// `RESOLVED_ABSOLUTE`, restated.
+fn resolved(candidates: &[(f64, JetWitness)], h: f64) -> bool {
+    let Some((_, w)) = candidates
+        .iter()
+        .fold(None::<&(f64, JetWitness)>, |acc, c| match acc {
+            Some(a) if a.0 <= c.0 => acc,
+            _ => Some(c),
+        })
+    else {
+        return false;
+    };
+    if !candidates.iter().any(|(m, _)| m.is_finite()) {
+        return false;
+    }
+    let e = (0..2)
+        .map(|i| w.sd[i].powi(2) + w.bias[i].powi(2))
+        .sum::<f64>()
+        .sqrt();
+    e <= 1e-2 * w.k1.abs().max(w.k2.abs()) + 1e-4 / h
+}
+
+/// The witness of `Evaluator::jet_at` at `x`, from all `samples` of the cloud: the candidate of
+/// least estimated squared error among [`jet_candidates`] (the first of equals), or why there
+/// is none.
 pub fn jet_witness(
     x: &Vector3<f64>,
     samples: &[Sample],
     h: f64,
     config: &mls_core::JetConfig,
-) -> Option<JetWitness> {
+) -> Result<JetWitness, JetRefusal> {
     let candidates = jet_candidates(x, samples, h, config)?;
     candidates
         .into_iter()
@@ -501,4 +596,5 @@ pub fn jet_witness(
             _ => Some((m, w)),
         })
         .map(|(_, w)| w)
+        .ok_or(JetRefusal::NoFit)
 }

@@ -9,13 +9,14 @@
 
 mod adaptive;
 mod jet;
+mod jet_quadratic;
 mod line;
 mod normals;
 mod spacing;
 mod support;
 
 pub use adaptive::{AdaptiveWitness, Ladder, adaptive_witness};
-pub use jet::{JetWitness, jet_candidates, jet_witness};
+pub use jet::{JetRefusal, JetWitness, jet_candidates, jet_witness};
 pub use line::{LineWitness, line_witness, stationarity};
 use mls_core::Sample;
 use nalgebra::{Matrix3, SVector, SymmetricEigen, Vector3};

@@ -89,7 +89,8 @@ impl Summary {
             md,
             "Statuses are counted per query: `ok`, then codes 1–7 (no_neighbours, \
              too_few_neighbours, normal_undefined, gradient_vanishes, projection_failed, \
-             invalid_query, normal_estimation_failed).\n"
+             invalid_query, normal_estimation_failed); code 8 (outlier) is the jet's without \
+             file normals, which these checks do not run.\n"
         );
         md.push_str(
             "| class | clouds | failed | construction error | curvature ok/1/2/3/4/5/6 | \
