@@ -94,7 +94,7 @@ mod tests {
     fn codes_and_names_are_the_file_format() {
         assert_eq!(
             PointStatus::ALL.map(PointStatus::code),
-            [1, 2, 3, 4, 5, 6, 7]
+            [1, 2, 3, 4, 5, 6, 7, 8]
         );
         assert_eq!(
             PointStatus::ALL.map(PointStatus::name),
@@ -106,6 +106,7 @@ mod tests {
                 "projection_failed",
                 "invalid_query",
                 "normal_estimation_failed",
+                "outlier",
             ]
         );
         for s in PointStatus::ALL {

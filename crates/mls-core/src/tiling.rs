@@ -36,7 +36,7 @@ pub fn reach(
     estimated_normals: bool,
 ) -> Option<f64> {
     let evaluation = match (jet, cutoff) {
-        (Some(jet), _) => jet.max_radius() * h,
+        (Some(jet), _) => jet.reach_radius() * h,
         (None, Cutoff::Radius(c)) => c * h,
         (None, Cutoff::None) => return None,
     };

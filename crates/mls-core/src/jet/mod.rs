@@ -140,6 +140,21 @@ impl JetConfig {
         self.radius * std::f64::consts::SQRT_2.powi(self.scales.max(1) as i32 - 1)
     }
 
+    /// The largest support any fit of this configuration may gather, in units of h: the
+    /// ladder's top, or with heights only and [`Self::quadratic`] the largest degree-2 support
+    /// (what a tile's halo must hold).
+    pub fn reach_radius(&self) -> f64 {
+        let ladder = self.max_radius();
+        if self.quadratic && self.normals == NormalData::Ignore {
+            ladder.max(
+                QUADRATIC_RADIUS
+                    * std::f64::consts::SQRT_2.powi(QUADRATIC_SCALES.max(1) as i32 - 1),
+            )
+        } else {
+            ladder
+        }
+    }
+
     /// The lead scale's support radius in units of h, when it is fitted (see [`Self::lead`]).
     pub fn lead_radius(&self) -> Option<f64> {
         (self.lead && self.normals == NormalData::Slopes)
