@@ -9,10 +9,14 @@
 //!
 //! $$ E\,\hat c_L = c_L + M_{LL}^{-1} M_{LH}\, c_H $$
 //!
-//! (the omitted-variable bias of least squares). `c_H` comes from one degree-4 fit on the
-//! largest degree-2 support, where its scatter is least, with its covariance; each degree-2
-//! candidate then carries its predicted bias and that bias's own variance, and joins the
-//! degree-4 ladder's candidates in the choice of least estimated mean squared error
+//! (the omitted-variable bias of least squares). Most of a curved surface's quartic part is its
+//! normal sections' osculating circles, a function of the quadratic part alone: each fit
+//! subtracts them from the heights ([`circle_term`]). What is left, `c_H`, comes from one
+//! degree-4 fit on the largest degree-2 support, where its scatter is least, with its
+//! covariance; each degree-2 candidate carries its predicted bias and that bias's own variance,
+//! and joins the degree-4 ladder's candidates in the choice of least estimated mean squared
+//! error. Every fit weighs the samples by Tukey's biweight of their residuals to the largest
+//! support's plain fit ([`robust_weights`]), so that stray samples take no part
 //! (`docs/derivation.md`, "Degree").
 
 use crate::field::Sample;
@@ -35,7 +39,9 @@ pub struct HighTerms {
 /// covariance (from that of the [`HighTerms`] it was computed from).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Leak {
+    /// `S a_H`: the expected shift of `(a20, a11, a02)`.
     pub bias: Vector,
+    /// `S Cov(a_H) Sᵀ`.
     pub covariance: Matrix,
 }
 
