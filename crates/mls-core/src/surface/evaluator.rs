@@ -259,9 +259,10 @@ impl Evaluator<'_> {
         frame: &(Vector, Vector, Vector),
         h: f64,
     ) -> Result<Option<(f64, JetPoint)>, PointStatus> {
-        let radii: Vec<f64> = (0..jet::QUADRATIC_SCALES)
-            .map(|j| jet::QUADRATIC_RADIUS * h * std::f64::consts::SQRT_2.powi(j as i32))
-            .collect();
+        // Arrays, not vectors: after warm-up no query allocates.
+        let radii: [f64; jet::QUADRATIC_SCALES] = std::array::from_fn(|j| {
+            jet::QUADRATIC_RADIUS * h * std::f64::consts::SQRT_2.powi(j as i32)
+        });
         let Some(&top) = radii.last() else {
             return Ok(None);
         };
@@ -270,7 +271,7 @@ impl Evaluator<'_> {
             .index
             .samples_within_ordered(local, top, &mut self.hits, &mut self.support);
         // The largest support within the sample budget (the first in any case).
-        let mut counts = vec![0usize; radii.len()];
+        let mut counts = [0usize; jet::QUADRATIC_SCALES];
         for s in &self.support {
             let d2 = (s.point - local).norm_squared();
             for (c, r) in counts.iter_mut().zip(&radii) {
@@ -323,16 +324,17 @@ impl Evaluator<'_> {
             return Err(PointStatus::Outlier);
         }
         let robust = Some(&self.robust[..]);
-        let mut fits = Vec::with_capacity(last + 1);
-        for &r in &radii[..=last] {
-            fits.push(jet::quadratic(
+        let mut fits: [Option<jet::QuadraticFit>; jet::QUADRATIC_SCALES] =
+            [None; jet::QUADRATIC_SCALES];
+        for (fit, &r) in fits.iter_mut().zip(&radii[..=last]) {
+            *fit = jet::quadratic(
                 &self.support,
                 local,
                 frame,
                 r,
                 robust,
                 &mut self.quadratic_scratch,
-            ));
+            );
         }
         // The terms beside the circles of the largest support's own fit.
         let Some(top) = fits[last] else {
