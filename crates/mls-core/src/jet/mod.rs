@@ -331,10 +331,8 @@ pub fn quadratic_candidate(
     let p = jet_curvature(x, frame, fit).ok()?;
     let (t1, t2, n) = frame;
     let len = (n - t1 * fit.coefficients[A10] - t2 * fit.coefficients[A01]).norm();
-    // δk = −2(c² δa20 + cs δa11 + s² δa02)/|∇F| along each principal direction.
     let bias = [p.curvature.d1, p.curvature.d2].map(|d| {
-        let (cs, sn) = (d.dot(t1), d.dot(t2));
-        let g = Vector::new(cs * cs, cs * sn, sn * sn) * (-2.0 / len);
+        let g = curvature_gradient(&d, t1, t2, len);
         let (b, v) = (g.dot(&leak.bias), g.dot(&(leak.covariance * g)).max(0.0));
         (b * b - v).max(0.0).sqrt()
     });
@@ -414,8 +412,7 @@ pub fn jet_curvature(
     let c = curvature(&gradient, &hessian).ok_or(PointStatus::GradientVanishes)?;
     let len = gradient.norm();
     let sd = [c.d1, c.d2].map(|d| {
-        let (cs, sn) = (d.dot(t1), d.dot(t2));
-        let g = Vector::new(cs * cs, cs * sn, sn * sn) * (2.0 / len);
+        let g = curvature_gradient(&d, t1, t2, len);
         g.dot(&(fit.covariance * g))
             .max(0.0)
             .sqrt()
@@ -428,6 +425,14 @@ pub fn jet_curvature(
         bias: [0.0; 2],
         fit: *fit,
     })
+}
+
+/// The first-order change of a principal curvature along the unit direction `d` with the
+/// coefficients `(a20, a11, a02)`: `δk = −2(c² δa20 + cs δa11 + s² δa02)/|∇F|`, `(c, s)` the
+/// components of `d` on `(t1, t2)` and `len` = |∇F|.
+fn curvature_gradient(d: &Vector, t1: &Vector, t2: &Vector, len: f64) -> Vector {
+    let (cs, sn) = (d.dot(t1), d.dot(t2));
+    Vector::new(cs * cs, cs * sn, sn * sn) * (-2.0 / len)
 }
 
 /// A right-handed frame `(t1, t2, n)` around the unit normal `n`.
