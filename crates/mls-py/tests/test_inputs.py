@@ -208,7 +208,7 @@ def test_result_interface(reference, points):
     assert list(d) == reference.keys()
     assert np.array_equal(d["ny"], reference.normals[:, 1])
     assert reference.status.dtype == np.int32
-    assert set(mlscurv.STATUS) == set(range(8)) and mlscurv.STATUS[0] == "ok"
+    assert set(mlscurv.STATUS) == set(range(9)) and mlscurv.STATUS[8] == "outlier"
     with pytest.raises(AttributeError, match="has no attribute 'k1_sd'"):
         reference.k1_sd
     with pytest.raises(KeyError):

@@ -23,7 +23,7 @@ __version__: str
 STATUS: dict[int, str]
 """Codes of the ``status`` column: 0 ``ok``, 1 ``no_neighbours``, 2 ``too_few_neighbours``,
 3 ``normal_undefined``, 4 ``gradient_vanishes``, 5 ``projection_failed``, 6 ``invalid_query``,
-7 ``normal_estimation_failed``."""
+7 ``normal_estimation_failed``, 8 ``outlier`` (the jet without normals: a stray sample)."""
 
 Float64Array = npt.NDArray[np.float64]
 Int32Array = npt.NDArray[np.int32]
