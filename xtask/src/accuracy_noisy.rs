@@ -169,6 +169,8 @@ pub(crate) fn run_jet(
     run_jet_diag(points, normals, h, config, None)
 }
 
+/// [`run_jet`]; with `JET_DIAG` set, also the chosen degrees and supports, the 12 worst
+/// points and the make-up of the predicted error by decile (against `truth`).
 pub(crate) fn run_jet_diag(
     points: &[Point],
     normals: &[Vector],
@@ -207,13 +209,14 @@ pub(crate) fn run_jet_diag(
                 .iter()
                 .zip(truth)
                 .enumerate()
+                .filter(|(_, (_, t))| t[0].is_finite())
                 .filter_map(|(i, (r, t))| {
                     r.as_ref().ok().map(|p| ((p.curvature.k1 - t[0]).abs(), i))
                 })
                 .collect();
             worst.sort_by(|a, b| b.0.total_cmp(&a.0));
             for &(e, i) in worst.iter().take(12) {
-                let p = r[i].as_ref().unwrap();
+                let Ok(p) = r[i].as_ref() else { continue };
                 eprintln!(
                     "worst: err {e:.3} at {:.2?} truth {:.3?} k {:.3} {:.3} deg {} ρ/h {:.2} n·z {:.2}",
                     points[i].coords.as_slice(),
