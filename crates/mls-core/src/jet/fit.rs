@@ -180,7 +180,7 @@ const EXPONENTS: [(usize, usize); 45] = {
 /// The first `K` monomials `u^p v^q` in the order of [`moment`] into `out`, each a product of
 /// two powers (independent products, not a chain).
 #[inline(always)]
-fn powers<const K: usize>(u: f64, v: f64, out: &mut [f64; K]) {
+pub(super) fn powers<const K: usize>(u: f64, v: f64, out: &mut [f64; K]) {
     let (mut up, mut vp) = ([1.0; 9], [1.0; 9]);
     for i in 1..9 {
         up[i] = up[i - 1] * u;
@@ -379,7 +379,7 @@ const DERIVATIVE: [(f64, usize, f64, usize); 15] = {
 
 /// `(i_a + i_b, j_a + j_b)` as a [`moment`] index, for every pair of monomials: the entry
 /// `(a, b)` of the heights' normal matrix.
-const PRODUCT: [[usize; 15]; 15] = {
+pub(super) const PRODUCT: [[usize; 15]; 15] = {
     let mut t = [[0; 15]; 15];
     let mut a = 0;
     while a < 15 {

@@ -24,6 +24,7 @@ use crate::math::{Matrix, Point, Vector};
 
 use super::JetFit;
 use super::algebra::{Factor, Square};
+use super::fit::PRODUCT;
 
 /// The cubic and quartic coefficients of a degree-4 fit (the monomials 6..15 of
 /// [`super::MONOMIALS`]), in file units, with their covariance.
@@ -159,46 +160,37 @@ pub fn robust_weights(
 /// Exponents of the 15 monomials of degree ≤ 4 ([`super::MONOMIALS`]).
 const EXP: [(i32, i32); 15] = super::MONOMIALS;
 
-/// Index of `u^p v^q` among the monomials ordered by total degree, then by the power of v.
-const fn moment(p: i32, q: i32) -> usize {
-    let d = (p + q) as usize;
-    d * (d + 1) / 2 + q as usize
-}
-
-/// The exponents `(p, q)` of the monomials of degree ≤ 8 in the order of [`moment`].
-const EXPONENTS: [(usize, usize); 45] = {
-    let mut t = [(0, 0); 45];
-    let mut d = 0;
-    while d <= 8 {
-        let mut q = 0;
-        while q <= d {
-            t[d * (d + 1) / 2 + q] = (d - q, q);
-            q += 1;
-        }
-        d += 1;
-    }
-    t
-};
-
-/// The first `K` monomials `u^p v^q` in the order of [`moment`] (degree ≤ 8 for `K` = 45).
+/// The first `K` monomials `u^p v^q` by total degree, then by the power of v (degree ≤ 8 for
+/// `K` = 45), as the degree-4 fit computes them.
 #[inline]
 fn powers<const K: usize>(u: f64, v: f64) -> [f64; K] {
-    let (mut up, mut vp) = ([1.0; 9], [1.0; 9]);
-    for i in 1..9 {
-        up[i] = up[i - 1] * u;
-        vp[i] = vp[i - 1] * v;
-    }
     let mut out = [0.0; K];
-    for (x, &(p, q)) in out.iter_mut().zip(&EXPONENTS) {
-        *x = up[p] * vp[q];
-    }
+    super::fit::powers(u, v, &mut out);
     out
 }
 
-/// The entry `(a, b)` of a normal matrix over the monomials of [`EXP`]: the moment of their
-/// product.
-const fn product(a: usize, b: usize) -> usize {
-    moment(EXP[a].0 + EXP[b].0, EXP[a].1 + EXP[b].1)
+/// `Σ ω φ` over the first `H` monomials, `Σ ω² φ` over the first `H2`, `Σ ω z φ` over the
+/// first `Z` (`H2, Z ≤ H`), and `Σ ω`.
+fn moments<const H: usize, const H2: usize, const Z: usize>(
+    locals: &[Local],
+) -> ([f64; H], [f64; H2], [f64; Z], f64) {
+    let (mut h, mut h2, mut hz) = ([0.0; H], [0.0; H2], [0.0; Z]);
+    let mut weight = 0.0;
+    for l in locals {
+        let p = powers::<H>(l.u, l.v);
+        let (w, w2, wz) = (l.w, l.w * l.w, l.w * l.z);
+        for (h, p) in h.iter_mut().zip(&p) {
+            *h += w * p;
+        }
+        for (h2, p) in h2.iter_mut().zip(&p) {
+            *h2 += w2 * p;
+        }
+        for (hz, p) in hz.iter_mut().zip(&p) {
+            *hz += wz * p;
+        }
+        weight += w;
+    }
+    (h, h2, hz, weight)
 }
 
 /// A heights-only fit of degree 4 at `radius` to the heights less the circles' quartic part of
@@ -222,25 +214,12 @@ pub fn high_terms(
     if (locals.len() as f64) < super::MIN_EQUATIONS_PER_COEFFICIENT * 15.0 {
         return None;
     }
-    let (mut h, mut h2, mut hz) = ([0.0; 45], [0.0; 45], [0.0; 15]);
-    let mut weight = 0.0;
-    for l in locals {
-        let p = powers::<45>(l.u, l.v);
-        let (w, w2, wz) = (l.w, l.w * l.w, l.w * l.z);
-        for k in 0..45 {
-            h[k] += w * p[k];
-            h2[k] += w2 * p[k];
-        }
-        for k in 0..15 {
-            hz[k] += wz * p[k];
-        }
-        weight += w;
-    }
+    let (h, h2, hz, weight) = moments::<45, 45, 15>(locals);
     let (mut m, mut m2) = ([[0.0; 15]; 15], [[0.0; 15]; 15]);
     for a in 0..15 {
         for b in 0..15 {
-            m[a][b] = h[product(a, b)];
-            m2[a][b] = h2[product(a, b)];
+            m[a][b] = h[PRODUCT[a][b]];
+            m2[a][b] = h2[PRODUCT[a][b]];
         }
     }
     let (c, inv) = solve(&m, &hz)?;
@@ -324,31 +303,16 @@ pub fn quadratic(
     }
     // Moments: Σω φ to degree 6 (the matrix and its cross terms with degrees 3 and 4), Σω² φ
     // to degree 4, Σωz φ to degree 2.
-    let (mut h, mut h2, mut hz) = ([0.0; 28], [0.0; 15], [0.0; 6]);
-    let mut weight = 0.0;
-    for l in locals {
-        let p = powers::<28>(l.u, l.v);
-        let (w, w2, wz) = (l.w, l.w * l.w, l.w * l.z);
-        for k in 0..28 {
-            h[k] += w * p[k];
-        }
-        for k in 0..15 {
-            h2[k] += w2 * p[k];
-        }
-        for k in 0..6 {
-            hz[k] += wz * p[k];
-        }
-        weight += w;
-    }
+    let (h, h2, hz, weight) = moments::<28, 15, 6>(locals);
     let (mut m, mut m2) = ([[0.0; 6]; 6], [[0.0; 6]; 6]);
     let mut cross = [[0.0; 9]; 6];
     for a in 0..6 {
         for b in 0..6 {
-            m[a][b] = h[product(a, b)];
-            m2[a][b] = h2[product(a, b)];
+            m[a][b] = h[PRODUCT[a][b]];
+            m2[a][b] = h2[PRODUCT[a][b]];
         }
         for b in 0..9 {
-            cross[a][b] = h[product(a, b + 6)];
+            cross[a][b] = h[PRODUCT[a][b + 6]];
         }
     }
     let (mut c, inv) = solve(&m, &hz)?;
