@@ -413,6 +413,26 @@ pub(crate) fn explore(only: Option<&String>, with_peers: bool, write: bool) -> R
             ..JetConfig::default()
         };
         let run = run_jet_diag(&cloud.points, &normals, h, &default, Some(&cloud.truth))?;
+        if std::env::var_os("JET_DIAG").is_some() {
+            let s =
+                mls_core::MlsSurface::new(&cloud.points, &normals, mls_core::MlsConfig::new(h))?;
+            let r = s.jet_at_points(&cloud.points, &default, Parallelism::Rayon);
+            for (&i, t) in noisy.outliers.iter().zip(&noisy.outlier_truth) {
+                if let Ok(p) = &r[i] {
+                    eprintln!(
+                        "outlier {i}: deg {} ρ/h {:.2} a00/h {:.3} noise/h {:.4} k1 {:.3} t {:.3} sd {:.4} n·z {:.2}",
+                        p.fit.degree,
+                        p.fit.radius / h,
+                        p.fit.coefficients[0] / h,
+                        p.fit.noise / h,
+                        p.curvature.k1,
+                        t[0],
+                        p.sd[0],
+                        normals[i].z
+                    );
+                }
+            }
+        }
         let extra = outlier_report(noisy, &run);
         let mut r = row("jet (default)".into(), cloud, &run);
         r.method += &extra;

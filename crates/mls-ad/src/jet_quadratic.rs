@@ -19,6 +19,9 @@
 //!   circles' quartic part, from the previous round's coefficients) while the rounds contract
 //!   and the bounds hold, else the plain fit; `σ̂² = Σω r²/(Σω − tr(M⁻¹M₂))` and the covariance
 //!   `σ̂² M⁻¹M₂M⁻¹`;
+//! - the starting frame: the ladder's, unless its normal is over 45° from the estimated normals
+//!   averaged with the weights `(1 − d²/ρ_last²)³` (over 60° from it: only those facing it),
+//!   or the plain fit at `ρ_last` in it has a slope over 1; then that average's;
 //! - the frame turned to the normal of the plain (τ = 1) fit at `ρ_last` (`n − a10 t1 − a01 t2`,
 //!   production's tangent basis about it); the plain fit at `ρ_last` in that frame gives every
 //!   sample its Tukey biweight τ from its residual (file units, with that fit's circles), the
@@ -340,6 +343,38 @@ fn candidate(
     ))
 }
 
+/// The frame of the samples' normals averaged with the weights `(1 − d²/ρ²)³` over `|q − x| < ρ`;
+/// where that average is over 60° from the ladder's normal (`cos 60° = 0.5`: across a thin
+/// part), the average of only the normals facing it; the ladder's frame where the average
+/// vanishes.
+fn wide_frame(x: &Vector3<f64>, samples: &[Sample], rho: f64, ladder: &Frame) -> Frame {
+    let average = |keep: &dyn Fn(&Sample) -> bool| -> Vector3<f64> {
+        samples
+            .iter()
+            .filter(|s| keep(s))
+            .map(|s| {
+                let s2 = (s.point.coords - x).norm_squared() / (rho * rho);
+                if s2 < 1.0 {
+                    s.normal * (1.0 - s2).powi(3)
+                } else {
+                    Vector3::zeros()
+                }
+            })
+            .sum()
+    };
+    let own = ladder.2;
+    let mut sum = average(&|_| true);
+    if !(sum.dot(&own) > 0.5 * sum.norm()) {
+        sum = average(&|s| s.normal.dot(&own) > 0.0);
+    }
+    if !(sum.norm() > 0.0) {
+        return *ladder;
+    }
+    let n = sum.normalize();
+    let (t1, t2) = mls_core::math::tangent_basis(&n);
+    (t1, t2, n)
+}
+
 /// The query is an outlier: beyond the robust cutoff of the largest support's plain fit
 /// (`PointStatus::Outlier`).
 pub(crate) struct Outlier;
@@ -367,11 +402,25 @@ pub(crate) fn quadratic_candidates(
         })
         .unwrap_or(0);
     let top = radii[last];
-    // The frame turned to the normal of the largest support's plain fit (its slopes a10, a01:
-    // the scaled c10, c01 are the file-unit ones).
-    let Some(tilted) = quadratic(&rows(x, samples, frame, top, None)) else {
+    // The starting frame: the ladder's, unless its normal is over 45° from the normals averaged
+    // over the largest support or the plain fit in it is steeper than 45° at the query; then
+    // that average's.
+    let wide = wide_frame(x, samples, top, frame);
+    let tilted_in = |frame: &Frame| {
+        quadratic(&rows(x, samples, frame, top, None))
+            .filter(|t| (t.c[1] * t.c[1] + t.c[2] * t.c[2]).sqrt() <= 1.0)
+    };
+    let from_ladder = if frame.2.dot(&wide.2) >= 0.5f64.sqrt() {
+        tilted_in(frame).map(|t| (*frame, t))
+    } else {
+        None
+    };
+    let Some((frame, tilted)) = from_ladder.or_else(|| tilted_in(&wide).map(|t| (wide, t))) else {
         return Ok(Vec::new());
     };
+    let frame = &frame;
+    // The frame turned to the normal of the largest support's plain fit (its slopes a10, a01:
+    // the scaled c10, c01 are the file-unit ones).
     let (t1, t2, n) = frame;
     let turned = (n - t1 * tilted.c[1] - t2 * tilted.c[2]).normalize();
     let (u1, u2) = mls_core::math::tangent_basis(&turned);

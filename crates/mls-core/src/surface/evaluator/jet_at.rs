@@ -235,19 +235,34 @@ impl Evaluator<'_> {
             .rposition(|&c| c <= jet::QUADRATIC_MAX_SAMPLES)
             .unwrap_or(0);
         // The frame turned to the normal of the largest support's plain fit: the ladder's frame
-        // comes from the estimated normals near the query, which a stray query (an outlier
-        // off the surface) or heavy noise may tilt far, and the circles hold in the surface's
-        // own frame.
-        let Some(jet::QuadraticFit { fit: tilted, .. }) = jet::quadratic(
-            &self.support,
-            local,
-            frame,
-            radii[last],
-            None,
-            &mut self.quadratic_scratch,
-        ) else {
-            return Ok(None);
+        // comes from the estimated normals near the query, which heavy noise may tilt, and the
+        // circles hold in the surface's own frame. A stray query off the surface has few near
+        // samples, with normals its own offset spoiled, and may get a frame across the surface
+        // (a height field seen edge-on, which no turn recovers): where the ladder's normal is
+        // over 45° from the normals averaged over the whole support, or the fit in its frame
+        // finds the surface steeper than 45°, the fit starts from that average instead.
+        let wide = self.wide_frame(local, radii[last], frame);
+        let tilted_in = |this: &mut Self, frame: &(Vector, Vector, Vector)| {
+            jet::quadratic(
+                &this.support,
+                local,
+                frame,
+                radii[last],
+                None,
+                &mut this.quadratic_scratch,
+            )
+            .filter(|t| t.fit.coefficients[1].hypot(t.fit.coefficients[2]) <= 1.0)
         };
+        let near = frame.2.dot(&wide.2) >= std::f64::consts::FRAC_1_SQRT_2;
+        let (frame, tilted) = match near.then(|| tilted_in(self, frame)).flatten() {
+            Some(t) => (*frame, t),
+            None => match tilted_in(self, &wide) {
+                Some(t) => (wide, t),
+                None => return Ok(None),
+            },
+        };
+        let tilted = tilted.fit;
+        let frame = &frame;
         let (t1, t2, n) = frame;
         let turned = n - t1 * tilted.coefficients[1] - t2 * tilted.coefficients[2];
         let frame = &jet::frame(&turned.normalize());
@@ -316,6 +331,34 @@ impl Evaluator<'_> {
             }
         }
         Ok(best)
+    }
+
+    /// The frame of the estimated normals averaged over the support gathered, with the jet's
+    /// weights at `radius`; across a thin part (the average over 60° from the ladder's normal)
+    /// only those facing the ladder's frame; that frame where they cancel.
+    fn wide_frame(
+        &self,
+        local: &Point,
+        radius: f64,
+        ladder: &(Vector, Vector, Vector),
+    ) -> (Vector, Vector, Vector) {
+        let inv_r2 = 1.0 / (radius * radius);
+        let weighted = |s: &Sample| {
+            let t = (1.0 - (s.point - local).norm_squared() * inv_r2).max(0.0);
+            s.normal * (t * t * t)
+        };
+        let sum: Vector = self.support.iter().map(weighted).sum();
+        let own = ladder.2;
+        let sum = if sum.dot(&own) > 0.5 * sum.norm() {
+            sum
+        } else {
+            self.support
+                .iter()
+                .filter(|s| s.normal.dot(&own) > 0.0)
+                .map(weighted)
+                .sum()
+        };
+        UnitNormal::new(sum).map_or(*ladder, |n| jet::frame(&n.into_inner()))
     }
 
     /// The λ the ladder's first fit found, for the fits after it; none where that fit had no
