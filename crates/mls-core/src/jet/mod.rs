@@ -44,6 +44,7 @@ use crate::status::PointStatus;
 
 mod algebra;
 mod fit;
+pub(crate) mod ladder;
 mod quadratic;
 
 pub(crate) use fit::jet_fit;

@@ -4,9 +4,9 @@
 //! neighbour search and buffers).
 
 use super::Evaluator;
-use crate::field::Sample;
+use crate::jet::ladder::{self, Climb, Step};
 use crate::jet::{self, JetConfig, JetPoint, NormalData};
-use crate::math::{Point, UnitNormal, Vector};
+use crate::math::{Point, Vector};
 use crate::status::PointStatus;
 
 impl Evaluator<'_> {
@@ -19,15 +19,7 @@ impl Evaluator<'_> {
         let local = x - self.surface.index.origin;
         let h = self.surface.kernel.h();
         let mut frame = None;
-        let mut best: Option<JetPoint> = None;
-        let mut fallback: Option<JetPoint> = None;
-        self.ladder.clear();
-        let mut agree_last = true;
-        // Full-degree fits with too few equations to trust their own noise estimate: candidates
-        // for the choice at the front of the ladder, outside its stopping rules.
-        let mut early = 0;
-        let mut failure = PointStatus::NoNeighbours;
-        let (mut lo, mut hi) = ([f64::NEG_INFINITY; 2], [f64::INFINITY; 2]);
+        let mut climb = Climb::new(std::mem::take(&mut self.ladder));
         let scales = config.scales.max(1);
         let radius_of = |j: usize| config.radius * h * std::f64::consts::SQRT_2.powi(j as i32);
         // The support is gathered for two scales at a time; the fit keeps its own radius.
@@ -53,49 +45,21 @@ impl Evaluator<'_> {
                 .filter(|s| (s.point - local).norm_squared() <= r2)
                 .count();
             if inside < 6 {
-                failure = if inside == 0 {
-                    PointStatus::NoNeighbours
-                } else {
-                    PointStatus::TooFewNeighbours
-                };
+                climb.too_few(inside);
                 continue;
             }
+            // The frame normal: the input normals averaged with the jet's weights. Across a
+            // thin part the far sheet's normals are opposed and may turn that average away
+            // from the query's own sheet; past 60° from the nearest sample's normal (where the
+            // fit would refuse that sample's slope) only the normals facing the nearest's way
+            // are averaged. Elsewhere, on folds sampled more coarsely than they bend, the
+            // whole average is the better frame (docs/derivation.md).
             let frame = *frame.get_or_insert_with(|| {
-                // The frame normal: the input normals averaged with the jet's weights. Across
-                // a thin part the far sheet's normals are opposed and may turn that average
-                // away from the query's own sheet; past 60° from the nearest sample's normal
-                // (where the fit would refuse that sample's slope) only the normals facing the
-                // nearest's way are averaged. Elsewhere, on folds sampled more coarsely than
-                // they bend, the whole average is the better frame (docs/derivation.md).
-                let inv_r2 = 1.0 / (radius * radius);
-                let weighted = |s: &Sample, d2: f64| {
-                    let t = (1.0 - d2 * inv_r2).max(0.0);
-                    s.normal * (t * t * t)
-                };
-                // One pass for the average and the nearest sample (the first of equals).
-                let mut sum = Vector::zeros();
-                let (mut nearest, mut own) = (f64::INFINITY, Vector::zeros());
-                for s in &self.support {
-                    let d2 = (s.point - local).norm_squared();
-                    if d2 < nearest {
-                        (nearest, own) = (d2, s.normal);
-                    }
-                    sum += weighted(s, d2);
-                }
-                let sum = if sum.dot(&own) > 0.5 * sum.norm() * own.norm() {
-                    sum
-                } else {
-                    self.support
-                        .iter()
-                        .filter(|s| s.normal.dot(&own) > 0.0)
-                        .map(|s| weighted(s, (s.point - local).norm_squared()))
-                        .sum()
-                };
-                UnitNormal::new(sum)
-                    .ok()
-                    .map(|n| jet::frame(&n.into_inner()))
+                let own = ladder::nearest_normal(&self.support, &local);
+                ladder::frame_of_normals(&self.support, &local, radius, &own)
             });
             let Some(frame) = frame else {
+                self.ladder = climb.choose(None).0;
                 return Err(PointStatus::NormalUndefined);
             };
             // The ladder's first fit weighs the slopes in two rounds; the scales after it take
@@ -106,78 +70,43 @@ impl Evaluator<'_> {
                 &frame,
                 radius,
                 config,
-                self.handed_slope_weight(),
+                climb.slope_weight(),
                 &mut self.jet_scratch,
             ) else {
-                if best.is_some() {
-                    break;
+                match climb.no_fit() {
+                    Step::Stop => break,
+                    Step::Climb => continue,
                 }
-                failure = PointStatus::TooFewNeighbours;
-                continue;
             };
             let Ok(p) = jet::jet_curvature(x, &frame, &fit) else {
-                failure = PointStatus::GradientVanishes;
+                climb.no_curvature();
                 break;
             };
-            // Fits of a lower degree have a bias of another order: the ladder proper starts at
-            // the first scale that determines the full degree, and a lower-degree fit is kept
-            // only for a point where no scale does (sparse or boundary neighbourhoods).
-            if best.is_none() && fit.degree < config.degree.clamp(2, 4) {
-                fallback = fallback.or(Some(p));
-                continue;
-            }
-            if best.is_none() && !jet::trusted(&fit) {
-                self.ladder.push(p);
-                early += 1;
-                continue;
-            }
-            let k = [p.curvature.k1, p.curvature.k2];
-            let mut agree = true;
-            for i in 0..2 {
-                lo[i] = lo[i].max(k[i] - config.confidence * p.sd[i]);
-                hi[i] = hi[i].min(k[i] + config.confidence * p.sd[i]);
-                agree &= lo[i] <= hi[i];
-            }
-            self.ladder.push(p);
-            agree_last = agree;
-            if !agree {
-                break;
-            }
-            best = Some(p);
-            if jet::past_optimum(&self.ladder[early..]) {
+            let full = fit.degree >= config.degree.clamp(2, 4);
+            if climb.offer(p, &fit, full, config.confidence) == Step::Stop {
                 break;
             }
         }
-        let mut accepted = if best.is_some() {
-            self.ladder.len() - usize::from(!agree_last)
-        } else {
-            early
+        // The lead scale, from the support already gathered (it holds every smaller one), in
+        // one round with the slopes weighted as the ladder's first fit found.
+        let lead = match (config.lead_radius(), frame) {
+            (Some(lead), Some(Some(frame))) if climb.has_candidates() => jet::fit(
+                &self.support,
+                &local,
+                &frame,
+                lead * h,
+                config,
+                climb.slope_weight(),
+                &mut self.jet_scratch,
+            )
+            .filter(|f| f.degree == config.degree.clamp(2, 4) && jet::trusted(f))
+            .and_then(|f| jet::jet_curvature(x, &frame, &f).ok()),
+            _ => None,
         };
         // The ladder's choice with its estimated squared error; a lower-degree fallback (no
         // scale determined the full degree) has none, and any degree-2 candidate replaces it.
-        let ladder = if accepted == 0 {
-            fallback.map(|p| (f64::INFINITY, p)).ok_or(failure)
-        } else {
-            // The lead scale, from the support already gathered (it holds every smaller one),
-            // in one round with the slopes weighted as the ladder's first fit found.
-            if let (Some(lead), Some(Some(frame))) = (config.lead_radius(), frame) {
-                let lead = jet::fit(
-                    &self.support,
-                    &local,
-                    &frame,
-                    lead * h,
-                    config,
-                    self.handed_slope_weight(),
-                    &mut self.jet_scratch,
-                )
-                .filter(|f| f.degree == config.degree.clamp(2, 4) && jet::trusted(f));
-                if let Some(Ok(p)) = lead.map(|f| jet::jet_curvature(x, &frame, &f)) {
-                    self.ladder.insert(0, p);
-                    accepted += 1;
-                }
-            }
-            Ok(jet::choose_scale_with_mse(&self.ladder, accepted))
-        };
+        let (buffer, ladder) = climb.choose(lead);
+        self.ladder = buffer;
         match frame {
             // The degree-2 candidates, also where the ladder stopped on its bias (under noise a
             // wild small-support fit can stop it there), but not where the ladder's predicted
@@ -241,7 +170,8 @@ impl Evaluator<'_> {
         // (a height field seen edge-on, which no turn recovers): where the ladder's normal is
         // over 45° from the normals averaged over the whole support, or the fit in its frame
         // finds the surface steeper than 45°, the fit starts from that average instead.
-        let wide = self.wide_frame(local, radii[last], frame);
+        let wide =
+            ladder::frame_of_normals(&self.support, local, radii[last], &frame.2).unwrap_or(*frame);
         let tilted_in = |this: &mut Self, frame: &(Vector, Vector, Vector)| {
             jet::quadratic(
                 &this.support,
@@ -331,42 +261,5 @@ impl Evaluator<'_> {
             }
         }
         Ok(best)
-    }
-
-    /// The frame of the estimated normals averaged over the support gathered, with the jet's
-    /// weights at `radius`; across a thin part (the average over 60° from the ladder's normal)
-    /// only those facing the ladder's frame; that frame where they cancel.
-    fn wide_frame(
-        &self,
-        local: &Point,
-        radius: f64,
-        ladder: &(Vector, Vector, Vector),
-    ) -> (Vector, Vector, Vector) {
-        let inv_r2 = 1.0 / (radius * radius);
-        let weighted = |s: &Sample| {
-            let t = (1.0 - (s.point - local).norm_squared() * inv_r2).max(0.0);
-            s.normal * (t * t * t)
-        };
-        let sum: Vector = self.support.iter().map(weighted).sum();
-        let own = ladder.2;
-        let sum = if sum.dot(&own) > 0.5 * sum.norm() {
-            sum
-        } else {
-            self.support
-                .iter()
-                .filter(|s| s.normal.dot(&own) > 0.0)
-                .map(weighted)
-                .sum()
-        };
-        UnitNormal::new(sum).map_or(*ladder, |n| jet::frame(&n.into_inner()))
-    }
-
-    /// The λ the ladder's first fit found, for the fits after it; none where that fit had no
-    /// slope to weigh (λ = 0), so that a later scale with slopes weighs its own.
-    fn handed_slope_weight(&self) -> Option<f64> {
-        self.ladder
-            .first()
-            .map(|p| p.fit.slope_weight)
-            .filter(|&l| l > 0.0)
     }
 }
