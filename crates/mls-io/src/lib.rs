@@ -55,7 +55,7 @@ use std::path::{Path, PathBuf};
 pub use attributes::{Attribute, AttributeData, AttributeType, rename_clashes};
 pub use columns::{ColumnNames, ReadOptions, UNIT_TOLERANCE};
 pub use error::{ReadError, WriteError};
-pub use las::{LasReader, LasSink, LasTemplate};
+pub use las::{LasReader, LasSink, LasTemplate, creation_date as las_creation_date};
 pub use text::{read_csv, read_csv_with, read_xyz, read_xyz_with};
 pub use write::{
     Axis, Column, ColumnData, PlyFormat, WriteOptions, write_csv, write_csv_to, write_las,
