@@ -299,13 +299,27 @@ fn truncated_point_data_is_an_error_naming_the_file() {
         let path = dir.path().join(name);
         write_with_las_crate(&path, &points, compressed);
         let bytes = std::fs::read(&path).unwrap();
-        std::fs::write(&path, &bytes[..bytes.len() * 2 / 3]).unwrap();
+        let cut = bytes.len() * 2 / 3;
+        std::fs::write(&path, &bytes[..cut]).unwrap();
         let err = read_point_cloud(&path).unwrap_err();
         assert!(matches!(err, ReadError::Las { .. }), "{err:?}");
         let message = assert_message(&err, &path.display().to_string(), &[]);
         assert!(message.contains("truncated"), "{message}");
         if !compressed {
             assert!(message.contains("500 points"), "{message}");
+            assert!(
+                message.contains(&format!("ends at byte {cut}")),
+                "{message}"
+            );
+            // The first point cut short, from the header's offset and record length.
+            let start = u32::from_le_bytes(bytes[96..100].try_into().unwrap()) as usize;
+            let record = u16::from_le_bytes(bytes[105..107].try_into().unwrap()) as usize;
+            let whole = (cut - start) / record;
+            assert!(whole < 500, "{whole}");
+            assert!(
+                message.contains(&format!("within point {whole} ")),
+                "{message}"
+            );
         }
     }
 }
