@@ -172,14 +172,7 @@ fn tiled_budget(a: &CurvatureArgs, output: &pipeline::Output) -> Result<Option<u
         matches!(format, Some(FileFormat::Las | FileFormat::Laz)) && name != pipeline::STDIN_NAME;
     if !las {
         if let Some(budget) = a.memory {
-            // Other formats are read whole; say so only when they would not fit.
-            let size = std::fs::metadata(&a.input).map_or(0, |m| m.len());
-            if size > budget {
-                anyhow::bail!(
-                    "{name}: --memory {} MiB: only LAS and LAZ inputs are evaluated in tiles;                      this file is read whole (convert it to LAZ, e.g. with PDAL)",
-                    budget >> 20
-                );
-            }
+            in_memory_within(&a.input, format, budget, a.surface.run.quiet)?;
         }
         return Ok(None);
     }
@@ -198,18 +191,68 @@ fn tiled_budget(a: &CurvatureArgs, output: &pipeline::Output) -> Result<Option<u
         || matches!(output, pipeline::Output::Stdout(_))
     {
         anyhow::bail!(
-            "{name}: {points} points do not fit in {} MiB of memory and are evaluated in              tiles, whose output must be a .las or .laz file",
+            "{name}: {points} points do not fit in {} MiB of memory and are evaluated in tiles, \
+             whose output must be a .las or .laz file",
             budget >> 20
         );
     }
     if !given && !a.surface.run.quiet {
         eprintln!(
-            "mlscurv: note: {name}: {points} points need about {} MiB, more than the {} MiB              available: evaluating in tiles (--memory sets the budget)",
+            "mlscurv: note: {name}: {points} points need about {} MiB, more than the {} MiB \
+             available: evaluating in tiles (--memory sets the budget)",
             (points * mls_cli::tiled::BYTES_PER_POINT) >> 20,
             budget >> 20
         );
     }
     Ok(Some(budget))
+}
+
+/// Checks `--memory` for an input that is read whole (not LAS/LAZ, or standard input) before
+/// any work: refused when the in-memory run's estimate (the tiled run's, per point and
+/// besides) exceeds it, else a note says it fits.
+fn in_memory_within(
+    input: &std::path::Path,
+    format: Option<mls_io::FileFormat>,
+    budget: u64,
+    quiet: bool,
+) -> Result<()> {
+    let name = pipeline::input_name(input);
+    let refuse = |why: String| {
+        anyhow::anyhow!(
+            "{name}: --memory {}: {why}; only LAS and LAZ files are evaluated in tiles \
+             (convert it to LAZ, e.g. with PDAL, or give a larger --memory)",
+            mls_cli::tiled::describe_size(budget)
+        )
+    };
+    if name == pipeline::STDIN_NAME {
+        return Err(refuse(
+            "standard input is read whole and its size is not known before".into(),
+        ));
+    }
+    let Some(format) = format else {
+        // An unknown extension: the reader refuses the file, saying so.
+        return Ok(());
+    };
+    let points = mls_io::point_count(input, format)?;
+    let need = mls_cli::tiled::in_memory_bytes(points);
+    if need > budget {
+        return Err(refuse(format!(
+            "its {points} points need about {} in memory (estimated: {} bytes a point and {} \
+             besides), and it is read whole",
+            mls_cli::tiled::describe_size(need),
+            mls_cli::tiled::BYTES_PER_POINT,
+            mls_cli::tiled::describe_size(mls_cli::tiled::FIXED_BYTES)
+        )));
+    }
+    if !quiet {
+        eprintln!(
+            "mlscurv: note: {name}: {points} points need about {}, within --memory {}: \
+             evaluating in memory",
+            mls_cli::tiled::describe_size(need),
+            mls_cli::tiled::describe_size(budget)
+        );
+    }
+    Ok(())
 }
 
 fn curvature_tiled(

@@ -66,7 +66,7 @@ def test_plan_has_many_tiles_and_complete_halos(cloud):
     reach of its own points (checked by brute force on a subset), and it survives pickling."""
     points, normals = cloud
     dp = da.from_array(points, chunks=CHUNK)
-    capacity = mlscurv._mlscurv._capacity(mlscurv._mlscurv._parse_size(SMALL))
+    capacity = mlscurv.dask._capacity(SMALL)
     plan, *_ = mlscurv.dask._plan(
         dp, None, h=H, cutoff=5.0, method="jet", capacity=capacity,
         max_cells=mlscurv.dask.MAX_CELLS,
@@ -288,8 +288,14 @@ def test_bad_input_raises_the_single_calls_errors(client, cloud):
         mlscurv.dask.curvature(
             da.from_array(points, chunks=CHUNK), h=H, cutoff="none", method="paper"
         )
-    with pytest.raises(ValueError, match="memory"):
-        mlscurv.dask.curvature(da.from_array(points, chunks=CHUNK), h=H, memory="1MiB")
+    # The budget as given, and the least one rounded up (64 MiB and 400,000 bytes), as the
+    # binary says it.
+    for memory in ("64MiB", 64 << 20):
+        with pytest.raises(ValueError) as error:
+            mlscurv.dask.curvature(da.from_array(points, chunks=CHUNK), h=H, memory=memory)
+        assert str(error.value) == (
+            f"memory={memory!r}: too small; a tiled run needs at least 65 MiB"
+        )
 
 
 def test_docstring_example():

@@ -298,7 +298,14 @@ fn a_budget_too_small_or_an_output_that_cannot_stream_is_a_clear_error() {
         .arg(dir.path().join("out.csv"))
         .args(["--memory", "65MiB"]));
     assert_eq!(r.code, Some(1), "{}", r.stderr);
-    assert!(r.stderr.contains(".las or .laz"), "{}", r.stderr);
+    assert!(
+        r.stderr.contains(
+            "5000 points do not fit in 65 MiB of memory and are evaluated in tiles, whose \
+             output must be a .las or .laz file"
+        ),
+        "{}",
+        r.stderr
+    );
     let r = run(mlscurv()
         .arg("curvature")
         .arg(&input)

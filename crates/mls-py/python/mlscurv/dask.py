@@ -94,6 +94,12 @@ def _budget(memory) -> int:
     return _mlscurv._parse_size(memory) if isinstance(memory, str) else int(memory)
 
 
+def _capacity(memory) -> int:
+    """The points a tile may load under ``memory``, which an error names as it was given
+    (``memory='64MiB'``, ``memory=67108864``)."""
+    return _mlscurv._capacity(_budget(memory), f"memory={memory!r}")
+
+
 def _split(plan, points, normals, first):
     """The points of one chunk (rows ``first..``) that each tile loads: ``{tile: (rows,
     points, normals or None)}``, rows in input order."""
@@ -217,7 +223,7 @@ def _graph(points, normals, *, h, cutoff, method, orient, memory, max_cells, thr
     arrays, and with estimated normals the delayed ``[agree, compared]`` of the overlaps
     (None with given normals)."""
     options = dict(h=h, cutoff=cutoff, method=method, orient=orient, threads=threads)
-    capacity = _mlscurv._capacity(_budget(memory))
+    capacity = _capacity(memory)
     _mlscurv._reach(h, cutoff, method, normals is None)  # the options' errors before any work
     _mlscurv._check_orient(orient)
     plan, lo, hi, offsets, p_blocks, n_blocks, incidence = _plan(
