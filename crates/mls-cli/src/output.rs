@@ -235,7 +235,8 @@ impl Carried {
 }
 
 /// Checks a file output path whose directory must exist: that directory exists, and an
-/// `existing` file is replaced only when writable or `force` (its permissions are kept).
+/// `existing` file is replaced only when writable or `force` (its permissions are kept), and
+/// a file can be created in the directory of the file a symbolic link points to.
 pub fn check_replaceable(
     path: &Path,
     existing: Option<&std::fs::Metadata>,
@@ -265,5 +266,9 @@ pub fn check_replaceable(
             );
         }
     }
+    // As the writer will: a temporary file created (and here removed) in the directory of
+    // the file a link points to, so that a directory this user cannot write to is found now
+    // rather than after the computation.
+    mls_io::check_writable(path)?;
     Ok(())
 }

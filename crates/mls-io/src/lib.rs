@@ -58,8 +58,8 @@ pub use error::{ReadError, WriteError};
 pub use las::{LasReader, LasSink, LasTemplate, creation_date as las_creation_date};
 pub use text::{read_csv, read_csv_with, read_xyz, read_xyz_with};
 pub use write::{
-    Axis, Column, ColumnData, PlyFormat, WriteOptions, write_csv, write_csv_to, write_las,
-    write_las_chunks, write_ply, write_ply_to, write_point_cloud, write_point_cloud_as,
+    Axis, Column, ColumnData, PlyFormat, WriteOptions, check_writable, write_csv, write_csv_to,
+    write_las, write_las_chunks, write_ply, write_ply_to, write_point_cloud, write_point_cloud_as,
     write_point_cloud_as_with, write_point_cloud_to, write_point_cloud_to_with, write_xyz,
     write_xyz_to,
 };

@@ -156,6 +156,26 @@ def test_files_equal_the_single_call_on_their_concatenation(client, cloud, tmp_p
     assert first == len(points)
 
 
+def test_files_outputs_that_cannot_be_written_are_refused_before_any_work(client, cloud, tmp_path):
+    """An output in a directory that cannot exist (its parent is a regular file) is refused
+    before the inputs are read: the second input is missing, and reading it would fail
+    first otherwise."""
+    points, normals = cloud
+    good = tmp_path / "t0.las"
+    mlscurv.write(good, {"points": points[:1000], "normals": normals[:1000]})
+    blocker = tmp_path / "file"
+    blocker.write_text("")
+    outs = [blocker / "a.las", blocker / "b.las"]
+    with pytest.raises((ValueError, OSError)) as error:
+        mlscurv.dask.curvature_files(
+            [good, tmp_path / "missing.las"], outs, h=H, memory=SMALL
+        )
+    message = str(error.value)
+    assert message.startswith(f"{outs[0]}: "), message
+    assert "is not a directory" in message, message
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["file", "t0.las"]
+
+
 def test_estimated_normals_are_close(client, cloud):
     """Normals estimated per tile from the points within its halo: nearly every k1 is the
     single call's to 1e-9."""

@@ -115,6 +115,22 @@ fn write_batch(budget: u64, record_in: u64) -> u64 {
 /// cylinder, which `up` cannot orient, 56.6 %.
 pub const MIN_OVERLAP_AGREEMENT: f64 = 0.99;
 
+/// The directory of `output`.
+fn output_dir(output: &Path) -> std::path::PathBuf {
+    output
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(Path::new("."))
+        .to_path_buf()
+}
+
+/// The directory in which the tiles' temporary directory is made: `--temp-dir`, else the
+/// output's.
+fn temp_parent(run: &TiledRun<'_>) -> std::path::PathBuf {
+    run.temp_dir
+        .map_or_else(|| output_dir(run.output), Path::to_path_buf)
+}
+
 /// Whether a run over `points` points fits in `budget` bytes without tiles.
 pub fn fits_in_memory(points: u64, budget: u64) -> bool {
     in_memory_bytes(points) <= budget
@@ -172,6 +188,9 @@ pub fn curvature(run: &TiledRun<'_>, t: &mut Timings) -> Result<TiledSummary> {
     if options.at == At::Projected {
         bail!("{name}: --at projected is not available for a tiled (out-of-core) run");
     }
+    // The tiles' directory, created (and removed) now rather than after the first passes
+    // over the input: one this user cannot write to is refused before any work.
+    drop(Workspace::probe(&temp_parent(run))?);
     let s = &options.surface;
     let jet = (options.method == Method::Jet).then(|| evaluate::jet_config(false));
     let reader = open_reader(run.input)?;
@@ -242,15 +261,8 @@ pub fn curvature(run: &TiledRun<'_>, t: &mut Timings) -> Result<TiledSummary> {
 
     // Disk: the tile files (points with their halos, each removed once its tile is done),
     // the results, and the output, written last.
-    let out_dir = run
-        .output
-        .parent()
-        .filter(|p| !p.as_os_str().is_empty())
-        .unwrap_or(Path::new("."))
-        .to_path_buf();
-    let parent = run
-        .temp_dir
-        .map_or_else(|| out_dir.clone(), Path::to_path_buf);
+    let out_dir = output_dir(run.output);
+    let parent = temp_parent(run);
     let record = if from_file { 56 } else { 32 };
     let loaded: u64 = plan.tiles().iter().map(|t| t.loaded).sum();
     let results = n * (RESULT_BYTES as u64 + u64::from(!from_file));

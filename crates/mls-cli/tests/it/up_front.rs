@@ -1,11 +1,13 @@
 //! What is refused before any work: a `--memory` budget that an input read whole would
-//! exceed.
+//! exceed, and an output (or a tiled run's temporary directory) that cannot be written. Each
+//! test gives an input whose reading would fail, so that an error naming the output, not the
+//! input, shows that the output was checked first.
 
 use std::path::Path;
 
 use mls_io::{Axis, Column, PlyFormat};
 
-use crate::common::{assert_one_line_error, mlscurv, run, run_ok, write_unit_sphere};
+use crate::common::{assert_one_line_error, listing, mlscurv, run, run_ok, write_unit_sphere};
 
 /// A unit sphere with exact normals, `n` points, written by mls-io as binary PLY.
 fn write_ply_sphere(path: &Path, n: usize) {
@@ -85,4 +87,54 @@ fn memory_for_an_input_read_whole_is_refused_when_exceeded_and_stated_when_met()
         "<stdin>",
         &["--memory 1 GiB: standard input is read whole"],
     );
+}
+
+/// A bad input (not PLY) beside outputs that cannot be written: the output's error comes
+/// first, so it comes before the input is read.
+#[cfg(target_os = "linux")]
+#[test]
+fn an_output_that_cannot_be_written_is_refused_before_the_input_is_read() {
+    let dir = tempfile::tempdir().unwrap();
+    let bad = dir.path().join("bad.ply");
+    std::fs::write(&bad, "not a ply file\n").unwrap();
+    // A symbolic link into a directory that does not exist (the link's own directory does),
+    // and a directory nobody can create files in, root included.
+    let link = dir.path().join("link.ply");
+    std::os::unix::fs::symlink(dir.path().join("missing/out.ply"), &link).unwrap();
+    let proc_out = Path::new("/proc/mlscurv-out.ply");
+    for output in [link.as_path(), proc_out] {
+        let name = output.display().to_string();
+        let r = run(mlscurv().arg("curvature").arg(&bad).arg("-o").arg(output));
+        assert_one_line_error(&r, &name, &[]);
+        assert!(!r.stderr.contains("bad.ply"), "{}", r.stderr);
+        let r = run(mlscurv()
+            .args(["eval", "--cloud"])
+            .arg(&bad)
+            .arg("--queries")
+            .arg(&bad)
+            .arg("-o")
+            .arg(output));
+        assert_one_line_error(&r, &name, &[]);
+        assert!(!r.stderr.contains("bad.ply"), "{}", r.stderr);
+        for command in ["normals", "project"] {
+            let r = run(mlscurv().arg(command).arg(&bad).arg("-o").arg(output));
+            assert_one_line_error(&r, &name, &[]);
+            assert!(!r.stderr.contains("bad.ply"), "{command}: {}", r.stderr);
+        }
+    }
+    let r = run(mlscurv().arg("curvature").arg(&bad).arg("-o").arg(proc_out));
+    assert!(
+        r.stderr.contains("cannot create a file in /proc"),
+        "{}",
+        r.stderr
+    );
+    let png = Path::new("/proc/mlscurv-out.png");
+    let r = run(mlscurv().arg("render").arg(&bad).arg("-o").arg(png));
+    assert_one_line_error(
+        &r,
+        "/proc/mlscurv-out.png",
+        &["cannot create a file in /proc"],
+    );
+    // Nothing left behind: the link, the input, no temporary file.
+    assert_eq!(listing(dir.path()).len(), 2, "{:?}", listing(dir.path()));
 }

@@ -416,6 +416,10 @@ def _occupied(counts):
     return np.packbits(counts > 0)
 
 
+def _check_output(path, out):
+    _mlscurv._check_output(path, out)
+
+
 def _write(path, out, chunk):
     # The writer reads the input again for its coordinates, attributes and LAS layout.
     _mlscurv._write_like(path, out, chunk)
@@ -469,6 +473,11 @@ def curvature_files(
         outs = [os.fspath(o) for o in out]
         if len(outs) != len(paths):
             raise ValueError(f"out: {len(outs)} paths for {len(paths)} inputs; give one per input")
+    # The outputs checked where they will be written, before any work: a directory that is
+    # missing or that the workers cannot write to is found now, not after the computation.
+    dask.compute(
+        *[delayed(_check_output, pure=False)(p, o) for p, o in zip(paths, outs)]
+    )
     # Read once and kept in the workers' memory (the cluster's, not this machine's): the
     # plan's passes (check, counts, split) would otherwise each decompress every file again.
     reads = list(dask.persist(*[delayed(_read, pure=True)(p) for p in paths]))
