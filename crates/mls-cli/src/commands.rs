@@ -150,7 +150,7 @@ pub fn curvature(a: CurvatureArgs) -> Result<()> {
             if a.method == Method::Jet {
                 eprintln!("  k1 predicted sd {}", pipeline::percentiles(&out.k1_sd));
             }
-            print_timings(&t, n);
+            print_timings(&t, n, "points");
             eprintln!("  wrote           {}", output.name());
         }
         Ok(())
@@ -303,7 +303,7 @@ fn curvature_tiled(
         if a.method == Method::Jet {
             eprintln!("  k1 predicted sd {}", pipeline::percentiles(&r.k1_sd));
         }
-        print_timings(&t, r.points as usize);
+        print_timings(&t, r.points as usize, "points");
         eprintln!("  wrote           {}", output.name());
     }
     Ok(())
@@ -324,16 +324,27 @@ fn cutoff_text(c: mls_core::Cutoff) -> String {
     }
 }
 
-fn print_timings(t: &Timings, n: usize) {
+/// Fewer items than this and the summary gives no rate: the fixed costs (reading, the
+/// index, the scale) would be most of the time, and the rate would say nothing about the
+/// throughput (3 queries: "12 points/s").
+const MIN_RATE_ITEMS: usize = 1000;
+
+/// The summary's line of stage times; with the rate of `n` `items` (`points`, `queries`) per
+/// second over the total, when there are enough of them to make it mean something.
+fn print_timings(t: &Timings, n: usize, items: &str) {
     let total: f64 = t.0.iter().map(|(_, s)| s).sum();
     let stages: Vec<String> =
         t.0.iter()
             .map(|(name, s)| format!("{name} {s:.3}"))
             .collect();
+    let rate = if n >= MIN_RATE_ITEMS {
+        format!(" ({:.0} {items}/s)", n as f64 / total.max(1e-9))
+    } else {
+        String::new()
+    };
     eprintln!(
-        "  time (s)        {}; total {total:.3} ({:.0} points/s)",
-        stages.join(", "),
-        n as f64 / total.max(1e-9)
+        "  time (s)        {}; total {total:.3}{rate}",
+        stages.join(", ")
     );
 }
 
@@ -419,7 +430,7 @@ fn eval_with(a: &EvalArgs, output: &pipeline::Output) -> Result<()> {
         eprintln!("  h               {}", scale.describe("--h"));
         eprintln!("  cutoff          {}", cutoff_text(a.cutoff));
         eprintln!("  status          {}", pipeline::status_counts(status));
-        print_timings(&t, q.len());
+        print_timings(&t, q.len(), "queries");
         eprintln!("  wrote           {}", output.name());
     }
     Ok(())
@@ -491,7 +502,7 @@ pub fn normals(a: NormalsArgs) -> Result<()> {
                 "  status          {} (failed normals are written as 0 0 0)",
                 pipeline::status_counts(&status)
             );
-            print_timings(&t, points.len());
+            print_timings(&t, points.len(), "points");
             eprintln!("  wrote           {}", output.name());
         }
         Ok(())
@@ -552,7 +563,7 @@ pub fn project(a: ProjectArgs) -> Result<()> {
             eprintln!("  normals         {normals_source}");
             eprintln!("  status          {}", pipeline::status_counts(&out.status));
             eprintln!("  displacement    {}", pipeline::percentiles(&out.moved));
-            print_timings(&t, n);
+            print_timings(&t, n, "points");
             eprintln!("  wrote           {}", output.name());
         }
         Ok(())
