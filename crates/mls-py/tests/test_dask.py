@@ -171,7 +171,8 @@ def test_files_outputs_that_cannot_be_written_are_refused_before_any_work(client
             [good, tmp_path / "missing.las"], outs, h=H, memory=SMALL
         )
     message = str(error.value)
-    assert message.startswith(f"{outs[0]}: "), message
+    # The workers check the outputs in parallel: either may be the one reported.
+    assert any(message.startswith(f"{o}: ") for o in outs), message
     assert "is not a directory" in message, message
     assert sorted(p.name for p in tmp_path.iterdir()) == ["file", "t0.las"]
 
