@@ -2,9 +2,12 @@
 call's numbers bit for bit (given normals and h), close ones with estimated normals, and the
 single call's errors."""
 
+import ast
 import doctest
 import pickle
 import re
+import subprocess
+import sys
 import warnings
 
 import numpy as np
@@ -330,3 +333,31 @@ def test_docstring_example():
         for test in tests:
             runner.run(test)
     assert runner.failures == 0
+
+
+def test_readme_example_runs_as_written(tmp_path):
+    """The README's Dask example, taken verbatim from README.md and run as a script (in a
+    directory of its own, where it writes its survey tiles and their outputs): its worker
+    processes import it, which the `__main__` guard allows. It prints what the README shows
+    after it, and writes the files it names."""
+    from conftest import REPO
+
+    readme = (REPO / "README.md").read_text(encoding="utf-8")
+    section = readme[readme.index("### Python: Dask") :]
+    start = section.index("```python\n") + len("```python\n")
+    end = section.index("```", start)
+    code = section[start:end]
+    shown_at = section.index("```text\n", end) + len("```text\n")
+    shown = section[shown_at : section.index("```", shown_at)]
+    script = tmp_path / "example.py"
+    script.write_text(code, encoding="utf-8")
+    done = subprocess.run(
+        [sys.executable, str(script)], cwd=tmp_path, capture_output=True, text=True, timeout=600
+    )
+    assert done.returncode == 0, done.stderr
+    assert done.stdout == shown
+    lines = done.stdout.splitlines()
+    assert float(lines[0].rsplit(" ", 1)[1]) >= 0.99, lines[0]  # tiles that overlap
+    for path in ast.literal_eval(lines[1]):
+        points, _, columns = mlscurv.read(tmp_path / path, attributes=True)
+        assert len(points) == 5_000 and "k1" in columns, path
