@@ -163,18 +163,20 @@ pub fn tile_capacity(budget: u64, given: &str) -> Result<u64, String> {
     Ok((budget - FIXED_BYTES) / BYTES_PER_POINT)
 }
 
-/// A size in bytes for a message: in whole KiB, MiB or GiB when it is one (`64 MiB`),
-/// else in MiB with one decimal (`64.4 MiB`), and in bytes below 1 KiB.
+/// A size in bytes for a message: in whole GiB or MiB when it is one (`64 MiB`), else in MiB
+/// with one decimal (`445.5 MiB`), and below 1 MiB in whole KiB or bytes.
 pub fn describe_size(bytes: u64) -> String {
-    for (shift, unit) in [(30, "GiB"), (20, "MiB"), (10, "KiB")] {
+    for (shift, unit) in [(30, "GiB"), (20, "MiB")] {
         if bytes >= 1 << shift && bytes.is_multiple_of(1 << shift) {
             return format!("{} {unit}", bytes >> shift);
         }
     }
-    if bytes < 1 << 10 {
-        format!("{bytes} bytes")
-    } else {
+    if bytes >= 1 << 20 {
         format!("{:.1} MiB", bytes as f64 / f64::from(1 << 20))
+    } else if bytes >= 1 << 10 && bytes.is_multiple_of(1 << 10) {
+        format!("{} KiB", bytes >> 10)
+    } else {
+        format!("{bytes} bytes")
     }
 }
 
@@ -497,4 +499,19 @@ fn sampled_scale(
         spacing: Some(stats),
         factor: Some(factor),
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::describe_size;
+
+    #[test]
+    fn sizes_read_as_written_or_in_mib() {
+        assert_eq!(describe_size(64 << 20), "64 MiB");
+        assert_eq!(describe_size(2 << 30), "2 GiB");
+        // A million points' estimate: 400,000,000 bytes and 64 MiB.
+        assert_eq!(describe_size(400_000_000 + (64 << 20)), "445.5 MiB");
+        assert_eq!(describe_size(3 << 10), "3 KiB");
+        assert_eq!(describe_size(1000), "1000 bytes");
+    }
 }

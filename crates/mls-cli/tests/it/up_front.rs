@@ -123,8 +123,9 @@ fn an_output_that_cannot_be_written_is_refused_before_the_input_is_read() {
         }
     }
     let r = run(mlscurv().arg("curvature").arg(&bad).arg("-o").arg(proc_out));
+    // The operating system's words for the cause (`No such file or directory (os error 2)`).
     assert!(
-        r.stderr.contains("cannot create a file in /proc"),
+        r.stderr.contains("cannot create a file in /proc: ") && r.stderr.contains("(os error "),
         "{}",
         r.stderr
     );

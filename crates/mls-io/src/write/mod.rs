@@ -529,13 +529,18 @@ fn temp_beside(path: &Path) -> Result<(PathBuf, tempfile::NamedTempFile), WriteE
         builder.permissions(std::fs::Permissions::from_mode(0o666));
     }
     // tempfile's errors name the temporary path, which means nothing to the user: report a
-    // missing directory with the OS's own words, anything else by its kind, naming the
-    // destination and the directory.
+    // missing directory with the OS's own words, anything else naming the destination and the
+    // directory, with the OS's words for the cause (tempfile writes them before " at path
+    // …"; else the error's kind).
     std::fs::metadata(dir).map_err(io_error)?;
     let temp = builder.tempfile_in(dir).map_err(|e| {
+        let text = e.to_string();
+        let cause = text
+            .rsplit_once(" at path ")
+            .map_or_else(|| e.kind().to_string(), |(cause, _)| cause.to_owned());
         io_error(io::Error::new(
             e.kind(),
-            format!("cannot create a file in {}: {}", dir.display(), e.kind()),
+            format!("cannot create a file in {}: {cause}", dir.display()),
         ))
     })?;
     Ok((resolved, temp))
