@@ -150,7 +150,7 @@ pub fn curvature(a: CurvatureArgs) -> Result<()> {
             if a.method == Method::Jet {
                 eprintln!("  k1 predicted sd {}", pipeline::percentiles(&out.k1_sd));
             }
-            print_timings(&t, n);
+            print_timings(&t, n, "points");
             eprintln!("  wrote           {}", output.name());
         }
         Ok(())
@@ -172,14 +172,7 @@ fn tiled_budget(a: &CurvatureArgs, output: &pipeline::Output) -> Result<Option<u
         matches!(format, Some(FileFormat::Las | FileFormat::Laz)) && name != pipeline::STDIN_NAME;
     if !las {
         if let Some(budget) = a.memory {
-            // Other formats are read whole; say so only when they would not fit.
-            let size = std::fs::metadata(&a.input).map_or(0, |m| m.len());
-            if size > budget {
-                anyhow::bail!(
-                    "{name}: --memory {} MiB: only LAS and LAZ inputs are evaluated in tiles;                      this file is read whole (convert it to LAZ, e.g. with PDAL)",
-                    budget >> 20
-                );
-            }
+            in_memory_within(&a.input, format, budget, a.surface.run.quiet)?;
         }
         return Ok(None);
     }
@@ -198,18 +191,68 @@ fn tiled_budget(a: &CurvatureArgs, output: &pipeline::Output) -> Result<Option<u
         || matches!(output, pipeline::Output::Stdout(_))
     {
         anyhow::bail!(
-            "{name}: {points} points do not fit in {} MiB of memory and are evaluated in              tiles, whose output must be a .las or .laz file",
+            "{name}: {points} points do not fit in {} MiB of memory and are evaluated in tiles, \
+             whose output must be a .las or .laz file",
             budget >> 20
         );
     }
     if !given && !a.surface.run.quiet {
         eprintln!(
-            "mlscurv: note: {name}: {points} points need about {} MiB, more than the {} MiB              available: evaluating in tiles (--memory sets the budget)",
+            "mlscurv: note: {name}: {points} points need about {} MiB, more than the {} MiB \
+             available: evaluating in tiles (--memory sets the budget)",
             (points * mls_cli::tiled::BYTES_PER_POINT) >> 20,
             budget >> 20
         );
     }
     Ok(Some(budget))
+}
+
+/// Checks `--memory` for an input that is read whole (not LAS/LAZ, or standard input) before
+/// any work: refused when the in-memory run's estimate (the tiled run's, per point and
+/// besides) exceeds it, else a note says it fits.
+fn in_memory_within(
+    input: &std::path::Path,
+    format: Option<mls_io::FileFormat>,
+    budget: u64,
+    quiet: bool,
+) -> Result<()> {
+    let name = pipeline::input_name(input);
+    let refuse = |why: String| {
+        anyhow::anyhow!(
+            "{name}: --memory {}: {why}; only LAS and LAZ files are evaluated in tiles \
+             (convert it to LAZ, e.g. with PDAL, or give a larger --memory)",
+            mls_cli::tiled::describe_size(budget)
+        )
+    };
+    if name == pipeline::STDIN_NAME {
+        return Err(refuse(
+            "standard input is read whole and its size is not known before".into(),
+        ));
+    }
+    let Some(format) = format else {
+        // An unknown extension: the reader refuses the file, saying so.
+        return Ok(());
+    };
+    let points = mls_io::point_count(input, format)?;
+    let need = mls_cli::tiled::in_memory_bytes(points);
+    if need > budget {
+        return Err(refuse(format!(
+            "its {points} points need about {} in memory (estimated: {} bytes a point and {} \
+             besides), and it is read whole",
+            mls_cli::tiled::describe_size(need),
+            mls_cli::tiled::BYTES_PER_POINT,
+            mls_cli::tiled::describe_size(mls_cli::tiled::FIXED_BYTES)
+        )));
+    }
+    if !quiet {
+        eprintln!(
+            "mlscurv: note: {name}: {points} points need about {}, within --memory {}: \
+             evaluating in memory",
+            mls_cli::tiled::describe_size(need),
+            mls_cli::tiled::describe_size(budget)
+        );
+    }
+    Ok(())
 }
 
 fn curvature_tiled(
@@ -260,7 +303,7 @@ fn curvature_tiled(
         if a.method == Method::Jet {
             eprintln!("  k1 predicted sd {}", pipeline::percentiles(&r.k1_sd));
         }
-        print_timings(&t, r.points as usize);
+        print_timings(&t, r.points as usize, "points");
         eprintln!("  wrote           {}", output.name());
     }
     Ok(())
@@ -281,16 +324,27 @@ fn cutoff_text(c: mls_core::Cutoff) -> String {
     }
 }
 
-fn print_timings(t: &Timings, n: usize) {
+/// Fewer items than this and the summary gives no rate: the fixed costs (reading, the
+/// index, the scale) would be most of the time, and the rate would say nothing about the
+/// throughput (3 queries: "12 points/s").
+const MIN_RATE_ITEMS: usize = 1000;
+
+/// The summary's line of stage times; with the rate of `n` `items` (`points`, `queries`) per
+/// second over the total, when there are enough of them to make it mean something.
+fn print_timings(t: &Timings, n: usize, items: &str) {
     let total: f64 = t.0.iter().map(|(_, s)| s).sum();
     let stages: Vec<String> =
         t.0.iter()
             .map(|(name, s)| format!("{name} {s:.3}"))
             .collect();
+    let rate = if n >= MIN_RATE_ITEMS {
+        format!(" ({:.0} {items}/s)", n as f64 / total.max(1e-9))
+    } else {
+        String::new()
+    };
     eprintln!(
-        "  time (s)        {}; total {total:.3} ({:.0} points/s)",
-        stages.join(", "),
-        n as f64 / total.max(1e-9)
+        "  time (s)        {}; total {total:.3}{rate}",
+        stages.join(", ")
     );
 }
 
@@ -376,7 +430,7 @@ fn eval_with(a: &EvalArgs, output: &pipeline::Output) -> Result<()> {
         eprintln!("  h               {}", scale.describe("--h"));
         eprintln!("  cutoff          {}", cutoff_text(a.cutoff));
         eprintln!("  status          {}", pipeline::status_counts(status));
-        print_timings(&t, q.len());
+        print_timings(&t, q.len(), "queries");
         eprintln!("  wrote           {}", output.name());
     }
     Ok(())
@@ -448,7 +502,7 @@ pub fn normals(a: NormalsArgs) -> Result<()> {
                 "  status          {} (failed normals are written as 0 0 0)",
                 pipeline::status_counts(&status)
             );
-            print_timings(&t, points.len());
+            print_timings(&t, points.len(), "points");
             eprintln!("  wrote           {}", output.name());
         }
         Ok(())
@@ -509,7 +563,7 @@ pub fn project(a: ProjectArgs) -> Result<()> {
             eprintln!("  normals         {normals_source}");
             eprintln!("  status          {}", pipeline::status_counts(&out.status));
             eprintln!("  displacement    {}", pipeline::percentiles(&out.moved));
-            print_timings(&t, n);
+            print_timings(&t, n, "points");
             eprintln!("  wrote           {}", output.name());
         }
         Ok(())

@@ -187,7 +187,9 @@ struct CurvatureArgs {
     /// Memory budget for a LAS/LAZ input (e.g. `2GiB`, `512M`): a cloud that does not fit is
     /// evaluated in spatial tiles with halos through temporary files, with the results of one
     /// whole run (bitwise with the file's normals and a given --h). Default: the machine's
-    /// available memory, less a fifth. The output must then be LAS or LAZ.
+    /// available memory, less a fifth. The output must then be LAS or LAZ. Other inputs are
+    /// read whole: a budget their run would exceed (about 400 bytes a point and 64 MiB) is
+    /// refused before any work.
     #[arg(long, value_parser = mls_cli::tiled::parse_size)]
     memory: Option<u64>,
     /// Directory for the temporary tiles of a tiled run (default: the output's directory).

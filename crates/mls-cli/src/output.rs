@@ -116,8 +116,17 @@ pub fn check_output(
             }
         );
     }
+    // The LAS header's date comes from SOURCE_DATE_EPOCH when it is set: a bad value is
+    // refused now, not when the header is written.
+    let las_date = |format: FileFormat, name: &dyn std::fmt::Display| -> Result<()> {
+        if matches!(format, FileFormat::Las | FileFormat::Laz) {
+            mls_io::las_creation_date().map_err(|e| anyhow!("{name}: {e}"))?;
+        }
+        Ok(())
+    };
     if is_stdio(path) {
         let format = format.or(stdout_default).unwrap_or(FileFormat::Csv);
+        las_date(format, &STDOUT_NAME)?;
         if format == FileFormat::Ply && !ascii && std::io::stdout().is_terminal() {
             bail!(
                 "{STDOUT_NAME}: refusing to write binary PLY to a terminal; redirect it, or add --ascii"
@@ -153,6 +162,7 @@ pub fn check_output(
             }
         ),
     };
+    las_date(format, &name)?;
     check_replaceable(path, existing.as_ref(), force)?;
     Ok(Output::File(path.to_path_buf(), format))
 }
@@ -225,7 +235,8 @@ impl Carried {
 }
 
 /// Checks a file output path whose directory must exist: that directory exists, and an
-/// `existing` file is replaced only when writable or `force` (its permissions are kept).
+/// `existing` file is replaced only when writable or `force` (its permissions are kept), and
+/// a file can be created in the directory of the file a symbolic link points to.
 pub fn check_replaceable(
     path: &Path,
     existing: Option<&std::fs::Metadata>,
@@ -255,5 +266,9 @@ pub fn check_replaceable(
             );
         }
     }
+    // As the writer will: a temporary file created (and here removed) in the directory of
+    // the file a link points to, so that a directory this user cannot write to is found now
+    // rather than after the computation.
+    mls_io::check_writable(path)?;
     Ok(())
 }

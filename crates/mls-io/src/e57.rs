@@ -19,6 +19,15 @@ use e57::{CartesianCoordinate, E57Reader, RecordDataType, RecordName};
 use crate::attributes::{Attribute, AttributeData, AttributeType, Scalar};
 use crate::{MAX_PREALLOCATED, PointCloud, ReadError, ReadOutcome, Scans};
 
+/// The number of points in every scan of an E57 file, from its XML section.
+pub(crate) fn record_count<R: Read + Seek>(reader: R, file: &str) -> Result<u64, ReadError> {
+    let e57 = E57Reader::new(reader).map_err(|e| ReadError::E57 {
+        file: file.to_owned(),
+        message: format!("not a readable E57 file: {e}"),
+    })?;
+    Ok(e57.pointclouds().iter().map(|pc| pc.records).sum())
+}
+
 /// Reads every scan of an E57 file from `reader`; `file` names it in errors.
 pub(crate) fn read<R: Read + Seek>(reader: R, file: &str) -> Result<ReadOutcome, ReadError> {
     let error = |message: String| ReadError::E57 {

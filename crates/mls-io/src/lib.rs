@@ -55,11 +55,11 @@ use std::path::{Path, PathBuf};
 pub use attributes::{Attribute, AttributeData, AttributeType, rename_clashes};
 pub use columns::{ColumnNames, ReadOptions, UNIT_TOLERANCE};
 pub use error::{ReadError, WriteError};
-pub use las::{LasReader, LasSink, LasTemplate};
+pub use las::{LasReader, LasSink, LasTemplate, creation_date as las_creation_date};
 pub use text::{read_csv, read_csv_with, read_xyz, read_xyz_with};
 pub use write::{
-    Axis, Column, ColumnData, PlyFormat, WriteOptions, write_csv, write_csv_to, write_las,
-    write_las_chunks, write_ply, write_ply_to, write_point_cloud, write_point_cloud_as,
+    Axis, Column, ColumnData, PlyFormat, WriteOptions, check_writable, write_csv, write_csv_to,
+    write_las, write_las_chunks, write_ply, write_ply_to, write_point_cloud, write_point_cloud_as,
     write_point_cloud_as_with, write_point_cloud_to, write_point_cloud_to_with, write_xyz,
     write_xyz_to,
 };
@@ -292,6 +292,51 @@ pub fn read_point_cloud_as_with(
         FileFormat::Csv => read_csv_with(reader, &file, options),
         FileFormat::Las | FileFormat::Laz => las::read(reader, &file),
         FileFormat::E57 => e57::read(reader, &file),
+    }
+}
+
+/// The number of points a file in `format` holds, without reading them: the count its header
+/// declares (PLY, LAS/LAZ, E57: every scan's records), or for a text format (XYZ, CSV) the
+/// number of lines that are neither blank nor `#` comments, an upper bound (a CSV header row
+/// counts), found by one pass over the bytes in constant memory.
+///
+/// # Errors
+/// [`ReadError::IsADirectory`], [`ReadError::Io`] if the file cannot be opened or read, and
+/// those of the format's header.
+pub fn point_count(path: &Path, format: FileFormat) -> Result<u64, ReadError> {
+    let file = path.display().to_string();
+    if path.is_dir() {
+        return Err(ReadError::IsADirectory { file });
+    }
+    let opened = File::open(path).map_err(|error| ReadError::Io {
+        file: file.clone(),
+        error,
+    })?;
+    let mut reader = BufReader::with_capacity(1 << 20, opened);
+    match format {
+        FileFormat::Ply => ply::vertex_count(reader, &file),
+        FileFormat::Las | FileFormat::Laz => Ok(LasReader::open(path)?.len()),
+        FileFormat::E57 => e57::record_count(reader, &file),
+        FileFormat::Xyz | FileFormat::Csv => {
+            let mut count = 0;
+            let mut line = Vec::new();
+            loop {
+                line.clear();
+                let read = reader
+                    .read_until(b'\n', &mut line)
+                    .map_err(|error| ReadError::Io {
+                        file: file.clone(),
+                        error,
+                    })?;
+                if read == 0 {
+                    return Ok(count);
+                }
+                let text = line.trim_ascii_start();
+                if !text.is_empty() && !text.starts_with(b"#") {
+                    count += 1;
+                }
+            }
+        }
     }
 }
 

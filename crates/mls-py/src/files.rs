@@ -364,6 +364,22 @@ pub(crate) fn write(
     .map_err(file_error)
 }
 
+/// Checks, before any work, that `output` can be written as [`_write_like`] will write it
+/// for `input` (a known extension, not the input, a directory that exists and that this
+/// user can create a file in): `mlscurv.dask.curvature_files` runs it on the workers first.
+#[pyfunction]
+#[pyo3(signature = (input, output, *, force=false))]
+pub(crate) fn _check_output(
+    py: Python<'_>,
+    input: PathBuf,
+    output: PathBuf,
+    force: bool,
+) -> PyResult<()> {
+    py.detach(|| pipeline::check_output(&[input.as_path()], &output, None, force, false, None))
+        .map(drop)
+        .map_err(file_error)
+}
+
 /// Writes the points of `input` with `data` (a mapping of a result's columns but the
 /// coordinates, one row per point of `input`) to `output` as `mlscurv curvature input -o
 /// output` writes its result: with the input's attributes

@@ -344,6 +344,7 @@ fn _mlscurv(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(tiles::_tile_curvature, m)?)?;
     m.add_function(wrap_pyfunction!(tiles::_overlap_counts, m)?)?;
     m.add_function(wrap_pyfunction!(files::_write_like, m)?)?;
+    m.add_function(wrap_pyfunction!(files::_check_output, m)?)?;
     m.add_class::<tiles::PyGrid>()?;
     m.add_class::<tiles::PyPlan>()?;
     m.add("STATUS", status_names(m.py())?)?;

@@ -105,17 +105,11 @@ pub(crate) fn _check_orient(orient: &str) -> PyResult<()> {
 }
 
 /// The points a tile may load under a memory budget of `budget` bytes, as the binary's
-/// `--memory` gives them.
+/// `--memory` gives them; `given` is the `memory` argument as the caller wrote it, for the
+/// error when the budget is too small.
 #[pyfunction]
-pub(crate) fn _capacity(budget: u64) -> PyResult<u64> {
-    let capacity = budget.saturating_sub(tiled::FIXED_BYTES) / tiled::BYTES_PER_POINT;
-    if capacity < 1000 {
-        return Err(PyValueError::new_err(format!(
-            "memory {budget}: too small; a tile needs at least {} MiB",
-            (tiled::FIXED_BYTES + 1000 * tiled::BYTES_PER_POINT) >> 20
-        )));
-    }
-    Ok(capacity)
+pub(crate) fn _capacity(budget: u64, given: &str) -> PyResult<u64> {
+    tiled::tile_capacity(budget, given).map_err(PyValueError::new_err)
 }
 
 /// A memory size as the binary's `--memory` reads it (`300MiB`, `2G`, bytes).

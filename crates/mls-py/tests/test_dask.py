@@ -2,9 +2,12 @@
 call's numbers bit for bit (given normals and h), close ones with estimated normals, and the
 single call's errors."""
 
+import ast
 import doctest
 import pickle
 import re
+import subprocess
+import sys
 import warnings
 
 import numpy as np
@@ -66,7 +69,7 @@ def test_plan_has_many_tiles_and_complete_halos(cloud):
     reach of its own points (checked by brute force on a subset), and it survives pickling."""
     points, normals = cloud
     dp = da.from_array(points, chunks=CHUNK)
-    capacity = mlscurv._mlscurv._capacity(mlscurv._mlscurv._parse_size(SMALL))
+    capacity = mlscurv.dask._capacity(SMALL)
     plan, *_ = mlscurv.dask._plan(
         dp, None, h=H, cutoff=5.0, method="jet", capacity=capacity,
         max_cells=mlscurv.dask.MAX_CELLS,
@@ -154,6 +157,27 @@ def test_files_equal_the_single_call_on_their_concatenation(client, cloud, tmp_p
         assert np.array_equal(got["d1x"], whole["d1x"][rows], equal_nan=True)
         assert np.array_equal(got["intensity"], attrs["intensity"])
     assert first == len(points)
+
+
+def test_files_outputs_that_cannot_be_written_are_refused_before_any_work(client, cloud, tmp_path):
+    """An output in a directory that cannot exist (its parent is a regular file) is refused
+    before the inputs are read: the second input is missing, and reading it would fail
+    first otherwise."""
+    points, normals = cloud
+    good = tmp_path / "t0.las"
+    mlscurv.write(good, {"points": points[:1000], "normals": normals[:1000]})
+    blocker = tmp_path / "file"
+    blocker.write_text("")
+    outs = [blocker / "a.las", blocker / "b.las"]
+    with pytest.raises((ValueError, OSError)) as error:
+        mlscurv.dask.curvature_files(
+            [good, tmp_path / "missing.las"], outs, h=H, memory=SMALL
+        )
+    message = str(error.value)
+    # The workers check the outputs in parallel: either may be the one reported.
+    assert any(message.startswith(f"{o}: ") for o in outs), message
+    assert "is not a directory" in message, message
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["file", "t0.las"]
 
 
 def test_estimated_normals_are_close(client, cloud):
@@ -288,8 +312,14 @@ def test_bad_input_raises_the_single_calls_errors(client, cloud):
         mlscurv.dask.curvature(
             da.from_array(points, chunks=CHUNK), h=H, cutoff="none", method="paper"
         )
-    with pytest.raises(ValueError, match="memory"):
-        mlscurv.dask.curvature(da.from_array(points, chunks=CHUNK), h=H, memory="1MiB")
+    # The budget as given, and the least one rounded up (64 MiB and 400,000 bytes), as the
+    # binary says it.
+    for memory in ("64MiB", 64 << 20):
+        with pytest.raises(ValueError) as error:
+            mlscurv.dask.curvature(da.from_array(points, chunks=CHUNK), h=H, memory=memory)
+        assert str(error.value) == (
+            f"memory={memory!r}: too small; a tiled run needs at least 65 MiB"
+        )
 
 
 def test_docstring_example():
@@ -303,3 +333,31 @@ def test_docstring_example():
         for test in tests:
             runner.run(test)
     assert runner.failures == 0
+
+
+def test_readme_example_runs_as_written(tmp_path):
+    """The README's Dask example, taken verbatim from README.md and run as a script (in a
+    directory of its own, where it writes its survey tiles and their outputs): its worker
+    processes import it, which the `__main__` guard allows. It prints what the README shows
+    after it, and writes the files it names."""
+    from conftest import REPO
+
+    readme = (REPO / "README.md").read_text(encoding="utf-8")
+    section = readme[readme.index("### Python: Dask") :]
+    start = section.index("```python\n") + len("```python\n")
+    end = section.index("```", start)
+    code = section[start:end]
+    shown_at = section.index("```text\n", end) + len("```text\n")
+    shown = section[shown_at : section.index("```", shown_at)]
+    script = tmp_path / "example.py"
+    script.write_text(code, encoding="utf-8")
+    done = subprocess.run(
+        [sys.executable, str(script)], cwd=tmp_path, capture_output=True, text=True, timeout=600
+    )
+    assert done.returncode == 0, done.stderr
+    assert done.stdout == shown
+    lines = done.stdout.splitlines()
+    assert float(lines[0].rsplit(" ", 1)[1]) >= 0.99, lines[0]  # tiles that overlap
+    for path in ast.literal_eval(lines[1]):
+        points, _, columns = mlscurv.read(tmp_path / path, attributes=True)
+        assert len(points) == 5_000 and "k1" in columns, path

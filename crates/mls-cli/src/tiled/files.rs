@@ -85,13 +85,23 @@ pub(super) struct Workspace {
 }
 
 impl Workspace {
-    pub(super) fn new(parent: &Path, output: &Path) -> Result<Self> {
-        let dir = tempfile::Builder::new()
+    /// A new temporary directory in `parent`, not registered for removal on Ctrl-C: to
+    /// check before any work that one can be made there.
+    pub(super) fn probe(parent: &Path) -> Result<tempfile::TempDir> {
+        tempfile::Builder::new()
             .prefix(".mlscurv-tiles-")
             .tempdir_in(parent)
             .with_context(|| {
-                format!("{}: cannot create a temporary directory", parent.display())
-            })?;
+                format!(
+                    "{}: cannot create a temporary directory for the tiles (--temp-dir chooses \
+                     another place)",
+                    parent.display()
+                )
+            })
+    }
+
+    pub(super) fn new(parent: &Path, output: &Path) -> Result<Self> {
+        let dir = Self::probe(parent)?;
         if let Ok(mut paths) = CLEANUP.lock() {
             paths.push(dir.path().to_path_buf());
             paths.push(output.to_path_buf());

@@ -115,9 +115,69 @@ fn write_batch(budget: u64, record_in: u64) -> u64 {
 /// cylinder, which `up` cannot orient, 56.6 %.
 pub const MIN_OVERLAP_AGREEMENT: f64 = 0.99;
 
+/// The directory of `output`.
+fn output_dir(output: &Path) -> std::path::PathBuf {
+    output
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(Path::new("."))
+        .to_path_buf()
+}
+
+/// The directory in which the tiles' temporary directory is made: `--temp-dir`, else the
+/// output's.
+fn temp_parent(run: &TiledRun<'_>) -> std::path::PathBuf {
+    run.temp_dir
+        .map_or_else(|| output_dir(run.output), Path::to_path_buf)
+}
+
 /// Whether a run over `points` points fits in `budget` bytes without tiles.
 pub fn fits_in_memory(points: u64, budget: u64) -> bool {
-    points.saturating_mul(BYTES_PER_POINT) <= budget.saturating_sub(FIXED_BYTES)
+    in_memory_bytes(points) <= budget
+}
+
+/// The memory a run over `points` points is planned to need without tiles: what a tile of
+/// that many points is planned to need ([`BYTES_PER_POINT`] and [`FIXED_BYTES`]). (An
+/// in-memory run measures less: 235–247 bytes a point on a million points,
+/// docs/benchmarks.md.)
+pub fn in_memory_bytes(points: u64) -> u64 {
+    points
+        .saturating_mul(BYTES_PER_POINT)
+        .saturating_add(FIXED_BYTES)
+}
+
+/// The least budget a tiled run takes: room for tiles of 1000 points.
+pub const MIN_BUDGET: u64 = FIXED_BYTES + 1000 * BYTES_PER_POINT;
+
+/// The points a tile may load under a budget of `budget` bytes; `given` is the budget as the
+/// user wrote it (`--memory 64 MiB`, `memory='64MiB'`), for the error when it is below
+/// [`MIN_BUDGET`].
+pub fn tile_capacity(budget: u64, given: &str) -> Result<u64, String> {
+    if budget < MIN_BUDGET {
+        return Err(format!(
+            "{given}: too small; a tiled run needs at least {} MiB",
+            // Rounded up: the least whole number of MiB that is enough.
+            MIN_BUDGET.div_ceil(1 << 20)
+        ));
+    }
+    Ok((budget - FIXED_BYTES) / BYTES_PER_POINT)
+}
+
+/// A size in bytes for a message: in whole GiB or MiB when it is one (`64 MiB`), else in MiB
+/// with one decimal (`445.5 MiB`), and below 1 MiB in whole KiB or bytes.
+pub fn describe_size(bytes: u64) -> String {
+    for (shift, unit) in [(30, "GiB"), (20, "MiB")] {
+        if bytes >= 1 << shift && bytes.is_multiple_of(1 << shift) {
+            return format!("{} {unit}", bytes >> shift);
+        }
+    }
+    if bytes >= 1 << 20 {
+        format!("{:.1} MiB", bytes as f64 / f64::from(1 << 20))
+    } else if bytes >= 1 << 10 && bytes.is_multiple_of(1 << 10) {
+        format!("{} KiB", bytes >> 10)
+    } else {
+        format!("{bytes} bytes")
+    }
 }
 
 /// Runs `mlscurv curvature` tile by tile.
@@ -130,6 +190,9 @@ pub fn curvature(run: &TiledRun<'_>, t: &mut Timings) -> Result<TiledSummary> {
     if options.at == At::Projected {
         bail!("{name}: --at projected is not available for a tiled (out-of-core) run");
     }
+    // The tiles' directory, created (and removed) now rather than after the first passes
+    // over the input: one this user cannot write to is refused before any work.
+    drop(Workspace::probe(&temp_parent(run))?);
     let s = &options.surface;
     let jet = (options.method == Method::Jet).then(|| evaluate::jet_config(false));
     let reader = open_reader(run.input)?;
@@ -150,15 +213,11 @@ pub fn curvature(run: &TiledRun<'_>, t: &mut Timings) -> Result<TiledSummary> {
     let template = reader.template().clone();
     let record_in = reader.record_len() as u64;
     drop(reader);
-    let capacity = run.budget.saturating_sub(FIXED_BYTES) / BYTES_PER_POINT;
-    if capacity < 1000 {
-        bail!(
-            "--memory {} MiB: too small; a tiled run needs at least {} MiB",
-            run.budget >> 20,
-            // Rounded up: the least whole number of MiB that is enough.
-            (FIXED_BYTES + 1000 * BYTES_PER_POINT).div_ceil(1 << 20)
-        );
-    }
+    let capacity = tile_capacity(
+        run.budget,
+        &format!("--memory {}", describe_size(run.budget)),
+    )
+    .map_err(anyhow::Error::msg)?;
 
     // 1. The box and the counts.
     let grid = Grid::new(Vector::from(header_lo), Vector::from(header_hi), GRID_CELLS)
@@ -204,15 +263,8 @@ pub fn curvature(run: &TiledRun<'_>, t: &mut Timings) -> Result<TiledSummary> {
 
     // Disk: the tile files (points with their halos, each removed once its tile is done),
     // the results, and the output, written last.
-    let out_dir = run
-        .output
-        .parent()
-        .filter(|p| !p.as_os_str().is_empty())
-        .unwrap_or(Path::new("."))
-        .to_path_buf();
-    let parent = run
-        .temp_dir
-        .map_or_else(|| out_dir.clone(), Path::to_path_buf);
+    let out_dir = output_dir(run.output);
+    let parent = temp_parent(run);
     let record = if from_file { 56 } else { 32 };
     let loaded: u64 = plan.tiles().iter().map(|t| t.loaded).sum();
     let results = n * (RESULT_BYTES as u64 + u64::from(!from_file));
@@ -447,4 +499,19 @@ fn sampled_scale(
         spacing: Some(stats),
         factor: Some(factor),
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::describe_size;
+
+    #[test]
+    fn sizes_read_as_written_or_in_mib() {
+        assert_eq!(describe_size(64 << 20), "64 MiB");
+        assert_eq!(describe_size(2 << 30), "2 GiB");
+        // A million points' estimate: 400,000,000 bytes and 64 MiB.
+        assert_eq!(describe_size(400_000_000 + (64 << 20)), "445.5 MiB");
+        assert_eq!(describe_size(3 << 10), "3 KiB");
+        assert_eq!(describe_size(1000), "1000 bytes");
+    }
 }

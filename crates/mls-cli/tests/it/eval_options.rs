@@ -57,6 +57,49 @@ fn quiet_silences_the_summary_which_otherwise_goes_to_stderr() {
             loud.stderr
         );
     }
+    // Four queries give no rate: it would measure the fixed costs (reading, the index), not
+    // the throughput.
+    let times = loud
+        .stderr
+        .lines()
+        .find(|l| l.trim_start().starts_with("time (s)"))
+        .unwrap_or_else(|| panic!("no time line in\n{}", loud.stderr));
+    assert!(times.contains("; total "), "{times}");
+    assert!(!times.contains("/s"), "{times}");
+}
+
+/// Enough queries (here 1000 copies of the four) and the summary gives their rate, in
+/// queries per second.
+#[test]
+fn the_summary_gives_a_rate_of_queries_when_there_are_enough() {
+    let dir = tempfile::tempdir().unwrap();
+    let (cloud, queries) = inputs(dir.path());
+    let many = fs::read_to_string(&queries).unwrap().repeat(250);
+    fs::write(&queries, many).unwrap();
+    let r = run_ok(eval(&cloud).arg("--queries").arg(&queries));
+    let times = r
+        .stderr
+        .lines()
+        .find(|l| l.trim_start().starts_with("time (s)"))
+        .unwrap_or_else(|| panic!("no time line in\n{}", r.stderr));
+    let rate: f64 = times
+        .rsplit_once(" (")
+        .and_then(|(_, r)| r.strip_suffix(" queries/s)"))
+        .unwrap_or_else(|| panic!("no rate in {times}"))
+        .parse()
+        .unwrap();
+    let total: f64 = times
+        .split("; total ")
+        .nth(1)
+        .and_then(|t| t.split_whitespace().next())
+        .unwrap()
+        .parse()
+        .unwrap();
+    // The printed rate is the queries over the printed total (each rounded).
+    assert!(
+        (rate * total - 1000.0).abs() <= 1000.0 * 0.01 + rate * 0.0005,
+        "{times}"
+    );
 }
 
 #[test]

@@ -109,3 +109,48 @@ fn curvature_of_a_las_sphere_written_as_laz() {
         1.0 / R
     );
 }
+
+/// The header of `mlscurv curvature`'s LAS output, read back from its bytes: point format 6,
+/// legacy point counts 0 (LAS 1.4 R15), the 64-bit count, and with `SOURCE_DATE_EPOCH` that
+/// instant's creation date (1700000000 s is 2023-11-14, day 318; `date -u -d @1700000000`).
+#[test]
+fn las_output_header_is_las_1_4_and_dated_by_source_date_epoch() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("in.xyz");
+    crate::common::write_unit_sphere(&input, 2_000);
+    let output = dir.path().join("out.las");
+    run_ok(
+        mlscurv()
+            .arg("curvature")
+            .arg(&input)
+            .arg("-o")
+            .arg(&output)
+            .env("SOURCE_DATE_EPOCH", "1700000000")
+            .arg("--quiet"),
+    );
+    let bytes = std::fs::read(&output).unwrap();
+    let u16_at = |at: usize| u16::from_le_bytes(bytes[at..at + 2].try_into().unwrap());
+    assert_eq!(bytes[104], 6, "point format");
+    assert_eq!(&bytes[107..131], &[0u8; 24], "legacy point counts");
+    assert_eq!(
+        u64::from_le_bytes(bytes[247..255].try_into().unwrap()),
+        2_000
+    );
+    assert_eq!((u16_at(92), u16_at(90)), (2023, 318), "year, day of year");
+    // A value that is not a number of seconds is refused, naming it.
+    let r = crate::common::run(
+        mlscurv()
+            .arg("curvature")
+            .arg(&input)
+            .arg("-o")
+            .arg(&output)
+            .env("SOURCE_DATE_EPOCH", "yesterday")
+            .args(["--quiet", "--force"]),
+    );
+    assert!(!r.success);
+    assert!(
+        r.stderr.contains("SOURCE_DATE_EPOCH=`yesterday`"),
+        "{}",
+        r.stderr
+    );
+}

@@ -26,3 +26,4 @@ mod render;
 mod sphere;
 mod streams;
 mod tiled;
+mod up_front;

@@ -78,6 +78,9 @@ fn assert_same_bytes(a: &Path, b: &Path) {
 fn curvature(input: &Path, output: &Path, extra: &[&str]) -> crate::common::Run {
     run_ok(
         mlscurv()
+            // The LAS header's creation date fixed, so that runs either side of midnight
+            // (UTC) write the same bytes.
+            .env("SOURCE_DATE_EPOCH", "1700000000")
             .arg("curvature")
             .arg(input)
             .arg("-o")
@@ -295,7 +298,14 @@ fn a_budget_too_small_or_an_output_that_cannot_stream_is_a_clear_error() {
         .arg(dir.path().join("out.csv"))
         .args(["--memory", "65MiB"]));
     assert_eq!(r.code, Some(1), "{}", r.stderr);
-    assert!(r.stderr.contains(".las or .laz"), "{}", r.stderr);
+    assert!(
+        r.stderr.contains(
+            "5000 points do not fit in 65 MiB of memory and are evaluated in tiles, whose \
+             output must be a .las or .laz file"
+        ),
+        "{}",
+        r.stderr
+    );
     let r = run(mlscurv()
         .arg("curvature")
         .arg(&input)
@@ -305,4 +315,37 @@ fn a_budget_too_small_or_an_output_that_cannot_stream_is_a_clear_error() {
     assert_eq!(r.code, Some(2), "{}", r.stderr);
     assert!(r.stderr.contains("not a size"), "{}", r.stderr);
     assert_eq!(listing(dir.path()).len(), 1, "{:?}", listing(dir.path()));
+}
+
+/// A `--temp-dir` in which no directory can be made (a regular file) is refused before the
+/// input's points are read: the input here is cut short, and its error would come first if
+/// the directory were made only after the passes over the points.
+#[test]
+fn a_temp_dir_that_cannot_be_made_is_refused_before_the_points_are_read() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("terrain.las");
+    write_terrain(&input, 5_000, 40.0, 9);
+    let bytes = std::fs::read(&input).unwrap();
+    std::fs::write(&input, &bytes[..bytes.len() / 2]).unwrap();
+    let not_a_dir = dir.path().join("file");
+    std::fs::write(&not_a_dir, "").unwrap();
+    let r = run(mlscurv()
+        .arg("curvature")
+        .arg(&input)
+        .arg("-o")
+        .arg(dir.path().join("out.las"))
+        // 65 MiB holds 2,621 points: the 5,000 are tiled.
+        .args(["--memory", "65MiB", "--temp-dir"])
+        .arg(&not_a_dir));
+    assert_eq!(r.code, Some(1), "{}", r.stderr);
+    assert!(
+        r.stderr.contains(&format!(
+            "{}: cannot create a temporary directory for the tiles",
+            not_a_dir.display()
+        )),
+        "{}",
+        r.stderr
+    );
+    assert!(!r.stderr.contains("truncated"), "{}", r.stderr);
+    assert_eq!(listing(dir.path()).len(), 2, "{:?}", listing(dir.path()));
 }

@@ -32,7 +32,7 @@ use las::{GpsTimeType, Vlr};
 
 pub use read::LasReader;
 pub(crate) use read::{read, read_stream};
-pub use write::LasSink;
+pub use write::{LasSink, creation_date};
 pub(crate) use write::{write_file, write_file_chunks, write_stream};
 
 /// Points handed to the `las` reader or writer per call, for a LAZ file whose chunks hold

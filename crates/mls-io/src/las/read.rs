@@ -42,6 +42,9 @@ pub struct LasReader {
     notes: Vec<String>,
     bounds: ([f64; 3], [f64; 3]),
     batch: u64,
+    /// Where the point records start and where the stream ends (bytes from the header's
+    /// start), and whether they are compressed: for the message about a truncated file.
+    point_data: (u64, Option<u64>, bool),
 }
 
 impl std::fmt::Debug for LasReader {
@@ -52,6 +55,18 @@ impl std::fmt::Debug for LasReader {
             .field("done", &self.done)
             .finish_non_exhaustive()
     }
+}
+
+/// The offset of the point records (from the header's raw field) and the length of the
+/// stream, both from the stream's current position, which is restored.
+fn measure<R: Read + Seek>(read: &mut R) -> io::Result<(u64, Option<u64>)> {
+    let start = read.stream_position()?;
+    let offset = las::raw::Header::read_from(&mut *read)
+        .map(|h| u64::from(h.offset_to_point_data))
+        .unwrap_or(0);
+    let end = read.seek(io::SeekFrom::End(0))?;
+    read.seek(io::SeekFrom::Start(start))?;
+    Ok((offset, Some(end - start)))
 }
 
 impl LasReader {
@@ -78,6 +93,10 @@ impl LasReader {
             file: name.to_owned(),
             message,
         };
+        // Where the points start and the stream ends, measured before the `las` reader takes
+        // the stream; a header it cannot read gives its own error below.
+        let mut read = read;
+        let point_data = measure(&mut read).unwrap_or((0, None));
         let reader = Reader::new(read).map_err(|e| error(header_message(&e)))?;
         let header = reader.header();
         let expected = header.number_of_points();
@@ -164,6 +183,7 @@ impl LasReader {
             notes,
             bounds,
             batch: super::batch_points(chunk) as u64,
+            point_data: (point_data.0, point_data.1, format.is_compressed),
         })
     }
 
@@ -244,13 +264,32 @@ impl LasReader {
             message,
         };
         let want = max.min(expected - done);
+        let (start, end, compressed) = self.point_data;
+        let record = self.record_len as u64;
         let data = self.reader.read_points(want).map_err(|e| {
             error(if ends_early(&e) {
-                format!(
-                    "truncated: the header says {expected} points but the data ends within \
-                     points {done}..{}",
-                    done + want
-                )
+                match end {
+                    // Uncompressed: the last whole record says where.
+                    Some(end) if !compressed && record > 0 => {
+                        let whole = end.saturating_sub(start) / record;
+                        format!(
+                            "truncated: the header says {expected} points but the file ends at \
+                             byte {end}, within point {whole} (the point records start at byte \
+                             {start}, {record} bytes each; points 0..{whole} are whole)"
+                        )
+                    }
+                    Some(end) => format!(
+                        "truncated: the header says {expected} points but the compressed data \
+                         ends at byte {end} of the file, within points {done}..{} (points \
+                         0..{done} were read)",
+                        done + want
+                    ),
+                    None => format!(
+                        "truncated: the header says {expected} points but the data ends within \
+                         points {done}..{} (points 0..{done} were read)",
+                        done + want
+                    ),
+                }
             } else {
                 format!("point data from point {done}: {e}")
             })

@@ -289,9 +289,14 @@ where
     let (plan, builder, rows) = plan(file, columns, compressed, template)?;
     let header = builder.into_header().map_err(|e| las_error(file, &e))?;
     let mut writer = Writer::new(write, header).map_err(|e| las_error(file, &e))?;
-    let written = write_points(&mut writer, &plan, columns, rows).and_then(|()| writer.close());
+    let written = write_points(&mut writer, &plan, columns, rows)
+        .and_then(|bounds| writer.close().map(|()| bounds));
     match written {
-        Ok(()) => writer.into_inner().map_err(|e| las_error(file, &e)),
+        Ok(bounds) => {
+            let mut inner = writer.into_inner().map_err(|e| las_error(file, &e))?;
+            complete_header(&mut inner, file, &plan, bounds)?;
+            Ok(inner)
+        }
         Err(e) => {
             // The `las` writer closes itself when dropped and panics if that fails, which it
             // may after a failed write: leak it instead, on this error path only.
@@ -301,13 +306,145 @@ where
     }
 }
 
+/// The least and greatest stored (integer) coordinates of the records written, per axis.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct StoredBounds {
+    min: [i32; 3],
+    max: [i32; 3],
+}
+
+impl StoredBounds {
+    fn of(xyz: [i32; 3]) -> Self {
+        Self { min: xyz, max: xyz }
+    }
+
+    fn with(self, xyz: [i32; 3]) -> Self {
+        Self {
+            min: std::array::from_fn(|i| self.min[i].min(xyz[i])),
+            max: std::array::from_fn(|i| self.max[i].max(xyz[i])),
+        }
+    }
+
+    fn union(a: Option<Self>, b: Option<Self>) -> Option<Self> {
+        match (a, b) {
+            (Some(a), Some(b)) => Some(a.with(b.min).with(b.max)),
+            (a, b) => a.or(b),
+        }
+    }
+}
+
+/// Byte offsets in a LAS 1.4 header (LAS 1.4 R15, table 3).
+mod header_at {
+    /// File creation day of year, then year (`u16` each).
+    pub const CREATION_DATE: u64 = 90;
+    /// Legacy number of point records (`u32`), then the legacy numbers of points by return
+    /// (5 × `u32`).
+    pub const LEGACY_COUNTS: u64 = 107;
+    /// Max X, min X, max Y, min Y, max Z, min Z (`f64` each).
+    pub const BOUNDS: u64 = 179;
+}
+
+/// Completes the header the `las` crate wrote where LAS 1.4 R15 asks for other values than it
+/// writes, at the header of `stream`, which starts at the stream's current position (where
+/// [`Writer::into_inner`] leaves it), and returns there:
+/// - for point formats 6 to 10 the legacy point counts must be 0 (the 64-bit counts, which
+///   the crate writes, carry the numbers);
+/// - the bounds must be those of the coordinates as stored: the crate rounds the largest
+///   world coordinate up to the grid again and can land one step above it;
+/// - the creation date, which the crate leaves 0, is today's (UTC) or, when the
+///   `SOURCE_DATE_EPOCH` environment variable is set (reproducible output), that instant's.
+fn complete_header<W: Write + Seek>(
+    stream: &mut W,
+    file: &str,
+    plan: &Plan,
+    bounds: Option<StoredBounds>,
+) -> Result<(), WriteError> {
+    let (day, year) = creation_date().map_err(|message| WriteError::Las {
+        file: file.to_owned(),
+        message,
+    })?;
+    let io_error = |error| WriteError::Io {
+        file: file.to_owned(),
+        error,
+    };
+    let start = stream.stream_position().map_err(io_error)?;
+    let mut put = |at: u64, bytes: &[u8]| -> io::Result<()> {
+        stream.seek(io::SeekFrom::Start(start + at))?;
+        stream.write_all(bytes)
+    };
+    let mut date = [0u8; 4];
+    date[..2].copy_from_slice(&day.to_le_bytes());
+    date[2..].copy_from_slice(&year.to_le_bytes());
+    put(header_at::CREATION_DATE, &date).map_err(io_error)?;
+    if plan.format.is_extended {
+        put(header_at::LEGACY_COUNTS, &[0u8; 24]).map_err(io_error)?;
+    }
+    if let Some(b) = bounds {
+        let t = [plan.transforms.x, plan.transforms.y, plan.transforms.z];
+        let mut bytes = Vec::with_capacity(48);
+        for ((t, max), min) in t.iter().zip(b.max).zip(b.min) {
+            // As a reader computes a coordinate from its stored integer.
+            bytes.extend_from_slice(&t.direct(max).to_le_bytes());
+            bytes.extend_from_slice(&t.direct(min).to_le_bytes());
+        }
+        put(header_at::BOUNDS, &bytes).map_err(io_error)?;
+    }
+    stream
+        .seek(io::SeekFrom::Start(start))
+        .map(drop)
+        .map_err(io_error)
+}
+
+/// The LAS header's creation date as (day of year, year), UTC: `SOURCE_DATE_EPOCH`'s
+/// instant when that is set (for reproducible output), else now.
+///
+/// # Errors
+/// `SOURCE_DATE_EPOCH` is set but not a whole number of seconds: the message says so.
+pub fn creation_date() -> Result<(u16, u16), String> {
+    let seconds = match std::env::var("SOURCE_DATE_EPOCH") {
+        Ok(text) => text.trim().parse::<i64>().map_err(|_| {
+            format!(
+                "SOURCE_DATE_EPOCH=`{text}` is not a whole number of seconds since 1970-01-01 \
+                 (it sets the LAS header's creation date)"
+            )
+        })?,
+        Err(_) => std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .map_or(0, |d| d.as_secs() as i64),
+    };
+    let (year, day) = year_and_day(seconds.div_euclid(86_400));
+    // Years outside a u16 (before 1 or after 65535) are 0: unknown, as LAS allows.
+    Ok(u16::try_from(year).map_or((0, 0), |y| (day, y)))
+}
+
+/// The year and the day of the year (1 for 1 January) of day `days` after 1970-01-01, in the
+/// proleptic Gregorian calendar (H. Hinnant's `civil_from_days`).
+fn year_and_day(days: i64) -> (i64, u16) {
+    let z = days + 719_468;
+    let era = z.div_euclid(146_097);
+    let doe = z - era * 146_097;
+    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
+    // Day of the year counted from 1 March, in [0, 365].
+    let from_march = doe - (365 * yoe + yoe / 4 - yoe / 100);
+    let leap = |y: i64| (y % 4 == 0 && y % 100 != 0) || y % 400 == 0;
+    // March to December follow January and February of the same year, from 1 March of the
+    // civil year `yoe + era * 400`, which ends in February of the next.
+    let march_year = yoe + era * 400;
+    if from_march < 306 {
+        let before_march = if leap(march_year) { 60 } else { 59 };
+        (march_year, (from_march + before_march + 1) as u16)
+    } else {
+        (march_year + 1, (from_march - 306 + 1) as u16)
+    }
+}
+
 /// Encodes the rows as raw point records, chunk by chunk.
 fn write_points<W>(
     writer: &mut Writer<W>,
     plan: &Plan,
     columns: &[Column<'_>],
     rows: usize,
-) -> las::Result<()>
+) -> las::Result<Option<StoredBounds>>
 where
     W: Write + Seek + Send + Sync + 'static,
 {
@@ -333,14 +470,23 @@ where
             )
         })
         .collect();
-    // Rows `first..` into the records of `block`, column by column.
-    let encode = |first: usize, block: &mut [u8]| -> las::Result<()> {
+    // Rows `first..` into the records of `block`, column by column; the block's bounds.
+    let encode = |first: usize, block: &mut [u8]| -> las::Result<Option<StoredBounds>> {
+        let mut bounds: Option<StoredBounds> = None;
         for (row, record) in (first..).zip(block.chunks_exact_mut(record_len)) {
-            for ((&column, transform), at) in plan.xyz.iter().zip(&transforms).zip([0, 4, 8]) {
+            let mut xyz = [0i32; 3];
+            for (((&column, transform), at), stored) in plan
+                .xyz
+                .iter()
+                .zip(&transforms)
+                .zip([0, 4, 8])
+                .zip(&mut xyz)
+            {
                 // The nearest step of the header's grid.
-                let stored = transform.inverse(f64_at(&columns[column].data, row))?;
+                *stored = transform.inverse(f64_at(&columns[column].data, row))?;
                 record[at..at + 4].copy_from_slice(&stored.to_le_bytes());
             }
+            bounds = Some(bounds.map_or(StoredBounds::of(xyz), |b| b.with(xyz)));
             for f in &plan.defaults {
                 // One return of one, as a single-return scanner would record.
                 if matches!(f.name, "return_number" | "number_of_returns") {
@@ -366,27 +512,30 @@ where
             scatter(data, first, block, record_len, at);
             at += size;
         }
-        Ok(())
+        Ok(bounds)
     };
+    let mut bounds: Option<StoredBounds> = None;
     let mut start = 0;
     while start < rows {
         let end = rows.min(start + batch);
         let mut bytes = vec![0u8; (end - start) * record_len];
         // Encoded on every thread: the codec's threads would otherwise wait for this one. The
         // first error in row order is the one reported, whatever the threads.
-        let encoded: Vec<las::Result<()>> = bytes
+        let encoded: Vec<las::Result<Option<StoredBounds>>> = bytes
             .par_chunks_mut(RECORDS_PER_TASK * record_len)
             .enumerate()
             .map(|(task, block)| encode(start + task * RECORDS_PER_TASK, block))
             .collect();
-        encoded.into_iter().collect::<las::Result<()>>()?;
+        for block in encoded {
+            bounds = StoredBounds::union(bounds, block?);
+        }
         let data = PointDataBuilder::new()
             .for_header(writer.header())
             .build_from_bytes(bytes)?;
         writer.write_points(&data)?;
         start = end;
     }
-    Ok(())
+    Ok(bounds)
 }
 
 /// A LAS or LAZ file written a chunk of rows at a time ([`crate::write_las_chunks`]), for
@@ -401,6 +550,8 @@ pub struct LasSink {
     handle: Option<File>,
     writer: Option<(Writer<BufWriter<File>>, Plan)>,
     rows: u64,
+    /// The stored coordinates' bounds over the chunks written.
+    bounds: Option<StoredBounds>,
 }
 
 impl std::fmt::Debug for LasSink {
@@ -441,12 +592,15 @@ impl LasSink {
                 message: "a chunk's columns differ from the first chunk's".to_owned(),
             });
         }
-        if let Err(e) = write_points(writer, plan, columns, rows) {
-            // See `write_to`: a failed `las` writer panics when dropped.
-            if let Some(w) = self.writer.take() {
-                std::mem::forget(w);
+        match write_points(writer, plan, columns, rows) {
+            Ok(bounds) => self.bounds = StoredBounds::union(self.bounds, bounds),
+            Err(e) => {
+                // See `write_to`: a failed `las` writer panics when dropped.
+                if let Some(w) = self.writer.take() {
+                    std::mem::forget(w);
+                }
+                return Err(las_error(&file, &e));
             }
-            return Err(las_error(&file, &e));
         }
         self.rows += rows as u64;
         Ok(())
@@ -460,7 +614,7 @@ impl LasSink {
     /// Completes the file: header counts and bounds, LAZ chunk table.
     fn finish(mut self) -> Result<(), WriteError> {
         let file = self.file.clone();
-        let Some((mut writer, _)) = self.writer.take() else {
+        let Some((mut writer, plan)) = self.writer.take() else {
             return Err(WriteError::NoColumns { file });
         };
         if let Err(e) = writer.close() {
@@ -468,6 +622,7 @@ impl LasSink {
             return Err(las_error(&file, &e));
         }
         let mut inner = writer.into_inner().map_err(|e| las_error(&file, &e))?;
+        complete_header(&mut inner, &file, &plan, self.bounds)?;
         inner
             .flush()
             .map_err(|error| WriteError::Io { file, error })
@@ -495,6 +650,7 @@ pub(crate) fn write_file_chunks<E: From<WriteError>>(
         handle: Some(handle),
         writer: None,
         rows: 0,
+        bounds: None,
     };
     let result = body(&mut sink);
     if result.is_err() {
@@ -543,4 +699,30 @@ pub(crate) fn write_stream(
             file: file.to_owned(),
             error,
         })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::year_and_day;
+
+    /// Against dates that `date -u -d DATE +%j` gives, and against counting the days year by
+    /// year from 1970 over two centuries.
+    #[test]
+    fn year_and_day_is_the_calendars() {
+        assert_eq!(year_and_day(0), (1970, 1));
+        assert_eq!(year_and_day(-1), (1969, 365));
+        assert_eq!(year_and_day(11_017), (2000, 61)); // 2000-03-01
+        assert_eq!(year_and_day(20_088), (2024, 366)); // 2024-12-31
+        assert_eq!(year_and_day(20_794), (2026, 341)); // 2026-12-07
+        assert_eq!(year_and_day(47_540), (2100, 59)); // 2100-02-28
+        let mut days = 0;
+        for year in 1970..2170 {
+            let leap = (year % 4 == 0 && year % 100 != 0) || year % 400 == 0;
+            let length = if leap { 366 } else { 365 };
+            for day in 1..=length {
+                assert_eq!(year_and_day(days), (year, day), "day {days}");
+                days += 1;
+            }
+        }
+    }
 }

@@ -78,6 +78,17 @@ pub(crate) fn read(
     }
 }
 
+/// The number of vertices a PLY header declares, read from the header alone.
+pub(crate) fn vertex_count(mut reader: impl BufRead, file: &str) -> Result<u64, ReadError> {
+    let header = parse_header(&mut reader, file)?;
+    header
+        .elements
+        .iter()
+        .find(|e| e.name == "vertex")
+        .map(|e| e.count)
+        .ok_or_else(|| no_vertex_element(file, &header))
+}
+
 /// Finds the vertex element and maps each of its properties to a slot of [`SLOT_NAMES`] or
 /// to an attribute, in property order; list properties are skipped, with a note each.
 fn vertex_layout(

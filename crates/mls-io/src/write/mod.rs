@@ -471,41 +471,14 @@ fn write_atomically<E: From<WriteError>>(
     body: impl FnOnce(&mut BufWriter<&File>) -> Result<(), E>,
 ) -> Result<(), E> {
     let file = path.display().to_string();
-    // Through a symbolic link, the file it points to is replaced and the link kept, as
-    // writing into the link would do.
-    let resolved = resolve_links(path).map_err(io_error(&file))?;
     let io_error = |file: &String| {
         let file = file.clone();
         move |error| E::from(WriteError::Io { file, error })
     };
+    let (resolved, temp) = temp_beside(path)?;
     let path = resolved.as_path();
-    let Some(file_name) = path.file_name() else {
-        return Err(WriteError::NotAFilePath { file }.into());
-    };
-    // The temporary file must be on the same file system for the rename to be atomic.
-    let dir = match path.parent() {
-        Some(parent) if !parent.as_os_str().is_empty() => parent,
-        _ => Path::new("."),
-    };
-    let prefix = format!(".{}.", file_name.to_string_lossy());
-    let mut builder = tempfile::Builder::new();
-    builder.prefix(&prefix).suffix(".tmp");
-    #[cfg(unix)]
-    {
-        // The default 0600 of temporary files would otherwise become the output's mode; 0666
-        // less the umask is what creating the file directly gives.
-        use std::os::unix::fs::PermissionsExt;
-        builder.permissions(std::fs::Permissions::from_mode(0o666));
-    }
-    // tempfile's errors name the temporary path, which means nothing to the user: report a
-    // missing directory with the OS's own words, anything else by its kind, naming the
-    // destination.
-    std::fs::metadata(dir).map_err(io_error(&file))?;
-    let temp = builder
-        .tempfile_in(dir)
-        .map_err(|e| io_error(&file)(io::Error::new(e.kind(), e.kind().to_string())))?;
     // A file that is replaced keeps its permissions (a read-only file stays read-only, a
-    // group-writable one group-writable); a new one gets 0666 less the umask, as above.
+    // group-writable one group-writable); a new one gets 0666 less the umask (`temp_beside`).
     if let Ok(existing) = std::fs::metadata(path)
         && existing.is_file()
     {
@@ -524,6 +497,65 @@ fn write_atomically<E: From<WriteError>>(
         error: err.error,
     })?;
     Ok(())
+}
+
+/// The destination with its symbolic links followed ([`resolve_links`]) and a new temporary
+/// file beside it, in its directory (for the rename to be atomic, on the same file system),
+/// named `.NAME.XXXXXX.tmp`.
+fn temp_beside(path: &Path) -> Result<(PathBuf, tempfile::NamedTempFile), WriteError> {
+    let file = path.display().to_string();
+    let io_error = |error| WriteError::Io {
+        file: file.clone(),
+        error,
+    };
+    // Through a symbolic link, the file it points to is replaced and the link kept, as
+    // writing into the link would do.
+    let resolved = resolve_links(path).map_err(io_error)?;
+    let Some(file_name) = resolved.file_name() else {
+        return Err(WriteError::NotAFilePath { file });
+    };
+    let dir = match resolved.parent() {
+        Some(parent) if !parent.as_os_str().is_empty() => parent,
+        _ => Path::new("."),
+    };
+    let prefix = format!(".{}.", file_name.to_string_lossy());
+    let mut builder = tempfile::Builder::new();
+    builder.prefix(&prefix).suffix(".tmp");
+    #[cfg(unix)]
+    {
+        // The default 0600 of temporary files would otherwise become the output's mode; 0666
+        // less the umask is what creating the file directly gives.
+        use std::os::unix::fs::PermissionsExt;
+        builder.permissions(std::fs::Permissions::from_mode(0o666));
+    }
+    // tempfile's errors name the temporary path, which means nothing to the user: report a
+    // missing directory with the OS's own words, anything else naming the destination and the
+    // directory, with the OS's words for the cause (tempfile writes them before " at path
+    // …"; else the error's kind).
+    std::fs::metadata(dir).map_err(io_error)?;
+    let temp = builder.tempfile_in(dir).map_err(|e| {
+        let text = e.to_string();
+        let cause = text
+            .rsplit_once(" at path ")
+            .map_or_else(|| e.kind().to_string(), |(cause, _)| cause.to_owned());
+        io_error(io::Error::new(
+            e.kind(),
+            format!("cannot create a file in {}: {cause}", dir.display()),
+        ))
+    })?;
+    Ok((resolved, temp))
+}
+
+/// Checks that `path` can be written as the writers write it: the file a symbolic link
+/// points to, replaced through a temporary file created in its directory (here created and
+/// removed again). For the check of an output before a long computation.
+///
+/// # Errors
+/// [`WriteError::Io`] naming `path` when its directory is missing, not a directory or does
+/// not let this user create a file; [`WriteError::NotAFilePath`] for a path without a file
+/// name.
+pub fn check_writable(path: &Path) -> Result<(), WriteError> {
+    temp_beside(path).map(drop)
 }
 
 /// The path with every symbolic link of its last component followed (a dangling link gives

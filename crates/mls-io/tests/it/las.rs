@@ -51,13 +51,18 @@ impl Table {
     }
 
     fn columns(&self) -> Vec<Column<'_>> {
+        self.rows(0..ROWS)
+    }
+
+    /// The columns of rows `r`.
+    fn rows(&self, r: std::ops::Range<usize>) -> Vec<Column<'_>> {
         vec![
-            Column::component("x", &self.points, Axis::X),
-            Column::component("y", &self.points, Axis::Y),
-            Column::component("z", &self.points, Axis::Z),
-            Column::f64("k1", &self.k1),
-            Column::f64("k1_sd", &self.k1_sd),
-            Column::i32("status", &self.status),
+            Column::component("x", &self.points[r.clone()], Axis::X),
+            Column::component("y", &self.points[r.clone()], Axis::Y),
+            Column::component("z", &self.points[r.clone()], Axis::Z),
+            Column::f64("k1", &self.k1[r.clone()]),
+            Column::f64("k1_sd", &self.k1_sd[r.clone()]),
+            Column::i32("status", &self.status[r]),
         ]
     }
 }
@@ -294,13 +299,27 @@ fn truncated_point_data_is_an_error_naming_the_file() {
         let path = dir.path().join(name);
         write_with_las_crate(&path, &points, compressed);
         let bytes = std::fs::read(&path).unwrap();
-        std::fs::write(&path, &bytes[..bytes.len() * 2 / 3]).unwrap();
+        let cut = bytes.len() * 2 / 3;
+        std::fs::write(&path, &bytes[..cut]).unwrap();
         let err = read_point_cloud(&path).unwrap_err();
         assert!(matches!(err, ReadError::Las { .. }), "{err:?}");
         let message = assert_message(&err, &path.display().to_string(), &[]);
         assert!(message.contains("truncated"), "{message}");
         if !compressed {
             assert!(message.contains("500 points"), "{message}");
+            assert!(
+                message.contains(&format!("ends at byte {cut}")),
+                "{message}"
+            );
+            // The first point cut short, from the header's offset and record length.
+            let start = u32::from_le_bytes(bytes[96..100].try_into().unwrap()) as usize;
+            let record = u16::from_le_bytes(bytes[105..107].try_into().unwrap()) as usize;
+            let whole = (cut - start) / record;
+            assert!(whole < 500, "{whole}");
+            assert!(
+                message.contains(&format!("within point {whole} ")),
+                "{message}"
+            );
         }
     }
 }
@@ -415,4 +434,110 @@ fn radial_normals(points: &[[f64; 3]]) -> Vec<[f64; 3]> {
             [p[0] / len, p[1] / len, p[2] / len]
         })
         .collect()
+}
+
+/// The days from 1970-01-01 to now (UTC), as (year, day of year), counted year by year: an
+/// independent check of the header's date.
+fn today() -> (u16, u16) {
+    let seconds = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .unwrap()
+        .as_secs();
+    let mut days = seconds / 86_400;
+    let mut year = 1970;
+    loop {
+        let leap = (year % 4 == 0 && year % 100 != 0) || year % 400 == 0;
+        let length = if leap { 366 } else { 365 };
+        if days < length {
+            return (year as u16, days as u16 + 1);
+        }
+        days -= length;
+        year += 1;
+    }
+}
+
+fn u16_at(bytes: &[u8], at: usize) -> u16 {
+    u16::from_le_bytes(bytes[at..at + 2].try_into().unwrap())
+}
+
+fn f64_at(bytes: &[u8], at: usize) -> f64 {
+    f64::from_le_bytes(bytes[at..at + 8].try_into().unwrap())
+}
+
+/// The header fields LAS 1.4 R15 fixes, read from the bytes: for point format 6 the legacy
+/// point counts (offset 107, and the five by return after it) are 0 and the 64-bit count
+/// (offset 247) holds the number; max and min X, Y, Z (offset 179) are those of the stored
+/// coordinates, as a reader computes them; the creation date (offset 90) is today's.
+#[track_caller]
+fn check_header(bytes: &[u8], rows: usize, before: (u16, u16)) {
+    assert_eq!(&bytes[..4], b"LASF");
+    assert_eq!((bytes[24], bytes[25]), (1, 4), "version");
+    assert_eq!(bytes[104] & 0x3f, 6, "point format");
+    assert_eq!(&bytes[107..131], &[0u8; 24], "legacy point counts");
+    assert_eq!(
+        u64::from_le_bytes(bytes[247..255].try_into().unwrap()),
+        rows as u64
+    );
+    // Every point is a first return of one.
+    assert_eq!(
+        u64::from_le_bytes(bytes[255..263].try_into().unwrap()),
+        rows as u64
+    );
+    let points: Vec<Point> = Reader::new(std::io::Cursor::new(bytes.to_vec()))
+        .unwrap()
+        .read_all()
+        .unwrap()
+        .points()
+        .map(Result::unwrap)
+        .collect();
+    assert_eq!(points.len(), rows);
+    let axes: [fn(&Point) -> f64; 3] = [|p| p.x, |p| p.y, |p| p.z];
+    for (axis, coordinate) in axes.iter().enumerate() {
+        let max = points.iter().map(coordinate).fold(f64::MIN, f64::max);
+        let min = points.iter().map(coordinate).fold(f64::MAX, f64::min);
+        assert_eq!(f64_at(bytes, 179 + 16 * axis), max, "max of axis {axis}");
+        assert_eq!(f64_at(bytes, 187 + 16 * axis), min, "min of axis {axis}");
+    }
+    let date = (u16_at(bytes, 92), u16_at(bytes, 90));
+    // Written between `before` and now, which may straddle midnight.
+    assert!(date == before || date == today(), "{date:?}");
+}
+
+#[test]
+fn the_header_follows_las_1_4() {
+    let dir = tempfile::tempdir().unwrap();
+    let table = Table::new();
+    let before = today();
+    for (name, format) in [("h.las", FileFormat::Las), ("h.laz", FileFormat::Laz)] {
+        // A file (written through a seekable handle) and a stream (through memory).
+        let path = dir.path().join(name);
+        write_point_cloud(&path, &table.columns(), PlyFormat::default()).unwrap();
+        check_header(&std::fs::read(&path).unwrap(), ROWS, before);
+        let mut bytes = Vec::new();
+        write_point_cloud_to(
+            &mut bytes,
+            "-",
+            format,
+            &table.columns(),
+            PlyFormat::default(),
+        )
+        .unwrap();
+        check_header(&bytes, ROWS, before);
+        // In chunks (a tiled run's output), with the first file's layout.
+        let template = mls_io::LasReader::open(&path).unwrap().template().clone();
+        let chunked = dir.path().join(format!("chunks-{name}"));
+        mls_io::write_las_chunks::<mls_io::WriteError>(
+            &chunked,
+            format == FileFormat::Laz,
+            &template,
+            |sink| {
+                for part in [0..100, 100..ROWS] {
+                    sink.write(&table.rows(part))?;
+                }
+                Ok(())
+            },
+        )
+        .unwrap();
+        check_header(&std::fs::read(&chunked).unwrap(), ROWS, before);
+    }
 }

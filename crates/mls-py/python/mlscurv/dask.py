@@ -94,6 +94,12 @@ def _budget(memory) -> int:
     return _mlscurv._parse_size(memory) if isinstance(memory, str) else int(memory)
 
 
+def _capacity(memory) -> int:
+    """The points a tile may load under ``memory``, which an error names as it was given
+    (``memory='64MiB'``, ``memory=67108864``)."""
+    return _mlscurv._capacity(_budget(memory), f"memory={memory!r}")
+
+
 def _split(plan, points, normals, first):
     """The points of one chunk (rows ``first..``) that each tile loads: ``{tile: (rows,
     points, normals or None)}``, rows in input order."""
@@ -217,7 +223,7 @@ def _graph(points, normals, *, h, cutoff, method, orient, memory, max_cells, thr
     arrays, and with estimated normals the delayed ``[agree, compared]`` of the overlaps
     (None with given normals)."""
     options = dict(h=h, cutoff=cutoff, method=method, orient=orient, threads=threads)
-    capacity = _mlscurv._capacity(_budget(memory))
+    capacity = _capacity(memory)
     _mlscurv._reach(h, cutoff, method, normals is None)  # the options' errors before any work
     _mlscurv._check_orient(orient)
     plan, lo, hi, offsets, p_blocks, n_blocks, incidence = _plan(
@@ -410,6 +416,10 @@ def _occupied(counts):
     return np.packbits(counts > 0)
 
 
+def _check_output(path, out):
+    _mlscurv._check_output(path, out)
+
+
 def _write(path, out, chunk):
     # The writer reads the input again for its coordinates, attributes and LAS layout.
     _mlscurv._write_like(path, out, chunk)
@@ -463,6 +473,11 @@ def curvature_files(
         outs = [os.fspath(o) for o in out]
         if len(outs) != len(paths):
             raise ValueError(f"out: {len(outs)} paths for {len(paths)} inputs; give one per input")
+    # The outputs checked where they will be written, before any work: a directory that is
+    # missing or that the workers cannot write to is found now, not after the computation.
+    dask.compute(
+        *[delayed(_check_output, pure=False)(p, o) for p, o in zip(paths, outs)]
+    )
     # Read once and kept in the workers' memory (the cluster's, not this machine's): the
     # plan's passes (check, counts, split) would otherwise each decompress every file again.
     reads = list(dask.persist(*[delayed(_read, pure=True)(p) for p in paths]))
