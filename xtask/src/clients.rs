@@ -224,6 +224,16 @@ pub(crate) fn run() -> Result<()> {
         .into_iter()
         .filter(|n| !["x", "y", "z", "quality"].contains(n))
         .collect();
+    // The columns the README documents for the default method, so that a column our own
+    // writer lost cannot pass unnoticed.
+    let documented = "nx ny nz k1 k2 mean gauss d1x d1y d1z d2x d2y d2z k1_sd k2_sd status";
+    if fields.join(" ") != documented {
+        bail!(
+            "{}: columns {}, but the README documents {documented}",
+            ours("ply").display(),
+            fields.join(" ")
+        );
+    }
     println!(
         "clients: {} points, fields {}",
         table.get("x").map_or(0, <[f64]>::len),
@@ -462,8 +472,9 @@ fn script(python: &Path, dir: &Path, mode: &str, file: &Path) -> Result<(), Outc
     cmd.arg(&path).arg(mode).arg(file).arg(dir);
     match run_captured(&mut cmd) {
         Err(e) if format!("{e:#}").contains("cannot run") => Err(Outcome::Skipped(format!(
-            "no Python ({}): {e:#}",
-            python.display()
+            "cannot run Python {}: {} (set MLSCURV_CLIENTS_PYTHON, or run .ci/clients)",
+            python.display(),
+            e.root_cause()
         ))),
         Err(e) => Err(Outcome::Failed(format!("{e:#}"))),
         Ok((status, log)) if status.code() == Some(MISSING) => Err(Outcome::Skipped(format!(
@@ -616,7 +627,11 @@ fn numpy(
         Err(e) => rows.push(Row {
             program: PROGRAM,
             what: "ours.csv, ours.xyz".to_owned(),
-            outcome: Outcome::Skipped(format!("no Python: {e:#}")),
+            outcome: Outcome::Skipped(format!(
+                "cannot run Python {}: {}",
+                python.display(),
+                e.root_cause()
+            )),
         }),
         Ok((_, log)) if log.contains("No module named 'numpy'") => rows.push(Row {
             program: PROGRAM,
