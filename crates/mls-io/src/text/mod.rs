@@ -120,8 +120,15 @@ impl UnitCheck {
 ///
 /// Blank lines and lines whose first non-blank character is `#` are ignored. A first data
 /// row holding a single non-negative integer is the point-count line some scanners write at
-/// the top of `.pts` files, and is skipped. The first data row fixes the column count; every
-/// later row must have as many. The columns are read by this rule:
+/// the top of `.pts` files (and CloudCompare after its header), and is skipped. The first
+/// data row fixes the column count; every later row must have as many. A `//` line before
+/// the rows names the columns, split as the rows are (by tabs where both have them), as
+/// CloudCompare writes it, as does a first row of which no field is a number, or else the
+/// last `#` comment before the rows when it has one valid name per column. Such names are
+/// read as [`read_csv`] reads a header's: `x y z nx ny nz` case-insensitively, the others
+/// keeping their case with each character other than a letter, digit, `_`, `-` or `.` as
+/// `_` (CloudCompare's `Mean curvature (0.4)` is `Mean_curvature__0.4_`). The columns are
+/// read by this rule:
 ///
 /// - With [`ReadOptions::columns`], by those names: the count must match, `x y z` and
 ///   `nx ny nz` (if named) are geometry, columns named `_` are skipped unparsed, and every
