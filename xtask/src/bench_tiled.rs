@@ -176,6 +176,7 @@ fn laz_once(input: &Path, work: &Path) -> Result<(f64, f64, f64)> {
     let options = mls_io::WriteOptions {
         ply_format: mls_io::PlyFormat::BinaryLittleEndian,
         las: cloud.las.as_ref(),
+        ply_quality: None,
     };
     let out = work.join("io-mls.laz");
     mls_io::write_point_cloud_as_with(&out, mls_io::FileFormat::Laz, &cloud.columns(), &options)?;

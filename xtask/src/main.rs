@@ -9,6 +9,7 @@ mod accuracy;
 mod accuracy_noisy;
 mod bench;
 mod bench_tiled;
+mod clients;
 mod defaults;
 mod faults;
 mod gen_cloud;
@@ -91,8 +92,12 @@ enum Task {
     /// A seeded airborne-LiDAR test cloud (terrain, buildings, trees, scan strips) of exactly
     /// N points, streamed as LAS 1.4 point format 6 or LAZ.
     GenCloud(gen_cloud::Args),
+    /// Our outputs opened by CloudCompare, pymeshlab, laspy and numpy, and their files by our
+    /// reader: every curvature field by name with our values; skips a program not
+    /// installed; writes target/clients/.
+    Clients,
     /// What CI runs (.ci/run calls it): fmt --check, clippy -D warnings, the tests, validate
-    /// --quick, paper --quick and the Python package's tests.
+    /// --quick, paper --quick, the Python package's tests and clients.
     Ci,
 }
 
@@ -134,6 +139,7 @@ fn run(task: Task) -> Result<()> {
             write,
         } => accuracy_noisy::explore(cloud.as_ref(), peers, write),
         Task::GenCloud(args) => gen_cloud::run(&args.options(&invoked_from)),
+        Task::Clients => clients::run(),
         Task::Ci => ci(),
     }
 }
@@ -162,8 +168,8 @@ pub(crate) fn run_checked(cmd: &mut Command) -> Result<()> {
 }
 
 /// The one CI definition, which `.ci/run` calls after its installs: format, lints, the
-/// README's test command, the quick validation, the paper task at reduced density and the
-/// Python package's suite.
+/// README's test command, the quick validation, the paper task at reduced density, the
+/// Python package's suite and the other programs on our files.
 fn ci() -> Result<()> {
     run_checked(cargo().args(["fmt", "--all", "--", "--check"]))?;
     run_checked(cargo().args([
@@ -185,5 +191,8 @@ fn ci() -> Result<()> {
     // The paper task end to end (tables and figures into target/paper/).
     paper::run(&paper::Options::quick())?;
     // The Python package: pip install with maturin, and its pytest suite.
-    run_checked(&mut Command::new(".ci/python"))
+    run_checked(&mut Command::new(".ci/python"))?;
+    // CloudCompare, pymeshlab, laspy and numpy on our files (each skipped if not installed;
+    // .ci/run installs them).
+    clients::run()
 }

@@ -10,6 +10,10 @@ use mls_io::{Attribute, Column, FileFormat, LasTemplate, PlyFormat};
 use crate::Format;
 use crate::pipeline::{STDOUT_NAME, format_name, input_name, is_stdio};
 
+/// The column PLY output repeats as the vertex property `quality`, the one per-vertex value
+/// MeshLab reads from PLY ([`mls_io::WriteOptions::ply_quality`]): the mean curvature.
+pub const PLY_QUALITY: &str = "mean";
+
 /// Where a command's table goes.
 #[derive(Debug)]
 pub enum Output {
@@ -49,6 +53,7 @@ impl Output {
                 PlyFormat::BinaryLittleEndian
             },
             las,
+            ply_quality: Some(PLY_QUALITY),
         };
         match self {
             Self::File(path, format) => {
@@ -206,9 +211,14 @@ impl Carried {
 
     /// Renames the attributes whose names the output's own `columns` have (`k1` → `k1_in`),
     /// with one note on stderr naming them all, even with --quiet: a script reading the output
-    /// by name needs to know.
+    /// by name needs to know. With a `mean` column, `quality` is the output's own too: PLY
+    /// output repeats `mean` as `quality` ([`PLY_QUALITY`]), and an input's `quality` (such
+    /// as an earlier output's) would otherwise take its place.
     pub fn rename_clashes(&mut self, columns: &[Column<'_>], input: &Path) {
-        let reserved: Vec<&str> = columns.iter().map(|c| c.name).collect();
+        let mut reserved: Vec<&str> = columns.iter().map(|c| c.name).collect();
+        if reserved.contains(&PLY_QUALITY) {
+            reserved.push("quality");
+        }
         let renamed = mls_io::rename_clashes(&mut self.attributes, &reserved);
         if renamed.is_empty() {
             return;

@@ -41,6 +41,46 @@ impl ColumnNames {
                     i + 1
                 ));
             }
+        }
+        Self::checked(names, description)
+    }
+
+    /// The names of a file's own header (a `//` line or a first row of names, as split by
+    /// the file's separator), which may be any text: CloudCompare writes its scalar fields'
+    /// names, `Mean curvature (0.4)`, with spaces and parentheses. `x y z nx ny nz` (and
+    /// PCL's `normal_x` …) are matched case-insensitively; every other name keeps its case,
+    /// each character other than an ASCII letter, digit, `_`, `-` or `.` becoming `_`
+    /// (`Mean_curvature__0.4_`, whether CloudCompare wrote the spaces as spaces or as `_`), a
+    /// repeated one getting `_2`, `_3` …, and an empty one (or one of only `_`) being `colN`
+    /// for column `N`. The error is a sentence for the user.
+    pub(crate) fn from_header(fields: &[&str]) -> Result<Self, String> {
+        let mut taken = std::collections::HashSet::new();
+        let names = fields
+            .iter()
+            .enumerate()
+            .map(|(i, field)| {
+                let field = field.trim();
+                let slot = crate::slot_alias(&field.to_ascii_lowercase()).to_owned();
+                if SLOT_NAMES.contains(&slot.as_str()) {
+                    return slot;
+                }
+                let fallback = format!("col{}", i + 1);
+                let name = crate::attributes::usable_name(field, &fallback, &mut taken);
+                if name.chars().all(|c| c == '_') {
+                    taken.remove(&name);
+                    crate::attributes::usable_name(&fallback, &fallback, &mut taken)
+                } else {
+                    name
+                }
+            })
+            .collect();
+        Self::checked(names, &fields.join(","))
+    }
+
+    /// Checks names for a geometry that can be read: `x`, `y`, `z` present, once each, and
+    /// all of `nx`, `ny`, `nz` or none; no attribute named twice.
+    fn checked(names: Vec<String>, description: &str) -> Result<Self, String> {
+        for (i, name) in names.iter().enumerate() {
             if name != "_" && names[..i].contains(name) {
                 return Err(format!("column `{name}` named twice in `{description}`"));
             }
@@ -64,7 +104,8 @@ impl ColumnNames {
         Ok(Self(names))
     }
 
-    /// The names, lowercase, in column order.
+    /// The names, in column order: lowercase from a description; from a file's header the
+    /// geometry's lowercase and the others as the header has them, made writable.
     pub fn names(&self) -> &[String] {
         &self.0
     }

@@ -285,8 +285,10 @@ pub(crate) fn owned_columns(
 }
 
 /// Writes a table, as ``mlscurv`` writes its output: PLY (binary little endian unless
-/// ``ascii``), CSV, XYZ/TXT/PTS or LAS/LAZ (coordinates on a fine grid, other columns as extra
-/// bytes), by the extension unless ``format`` names it. The file is written atomically; an
+/// ``ascii``; columns other than ``x y z nx ny nz`` and colour as ``scalar_<name>``, and
+/// ``mean`` repeated as ``quality``, for CloudCompare and MeshLab), CSV (its header after
+/// ``//``, CloudCompare's form), XYZ/TXT/PTS or LAS/LAZ (coordinates on a fine grid, other
+/// columns as extra bytes), by the extension unless ``format`` names it. The file is written atomically; an
 /// existing read-only file is replaced only with ``force``.
 ///
 /// Parameters
@@ -310,7 +312,7 @@ pub(crate) fn owned_columns(
 /// >>> path = os.path.join(tempfile.mkdtemp(), "cloud.csv")
 /// >>> mlscurv.write(path, {"points": p, "label": np.array([1, 2, 3])})
 /// >>> print(open(path).read().splitlines()[0])
-/// x,y,z,label
+/// //x,y,z,label
 /// >>> mlscurv.read(path)[0].tolist() == p.tolist()
 /// True
 #[pyfunction]

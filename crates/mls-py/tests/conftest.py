@@ -73,7 +73,9 @@ def run_cli(cli):
 
 def read_ply_table(path) -> dict:
     """The columns of the vertex element of a binary little-endian PLY file whose first element
-    is the vertices, by name, as numpy arrays."""
+    is the vertices, by name, as numpy arrays. A property ``scalar_k1`` is the column ``k1``,
+    as mlscurv writes and reads it; ``quality``, which repeats ``mean`` for MeshLab, must equal
+    it and is left out."""
     data = Path(path).read_bytes()
     end = data.index(b"end_header\n") + len(b"end_header\n")
     header = data[:end].decode("ascii").splitlines()
@@ -88,7 +90,13 @@ def read_ply_table(path) -> dict:
         elif words[0] == "property" and element == "vertex":
             fields.append((words[2], types[words[1]]))
     table = np.frombuffer(data, dtype=np.dtype(fields), count=count, offset=end)
-    return {name: np.ascontiguousarray(table[name]) for name, _ in fields}
+    columns = {
+        name.removeprefix("scalar_"): np.ascontiguousarray(table[name]) for name, _ in fields
+    }
+    quality = columns.pop("quality", None)
+    if quality is not None:
+        assert quality.tobytes() == columns["mean"].tobytes(), "quality is not mean"
+    return columns
 
 
 def sphere(n: int, seed: int, noise: float = 0.0) -> np.ndarray:

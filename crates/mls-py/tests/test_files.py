@@ -52,7 +52,8 @@ def test_result_columns_and_types(tmp_path, cloud):
     result = mlscurv.curvature(points, normals, method="paper")
     path = tmp_path / "k.csv"
     mlscurv.write(path, result)
-    header = path.read_text().splitlines()[0].split(",")
+    # The header follows CloudCompare's form, `//x,y,z,...`.
+    header = path.read_text().splitlines()[0].removeprefix("//").split(",")
     assert header == result.keys()
     # Read back: positions and normals (the reader takes nx ny nz), the rest are its notes.
     with warnings.catch_warnings():

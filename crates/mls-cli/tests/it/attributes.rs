@@ -91,7 +91,7 @@ fn ply_colour_and_intensity_survive_curvature_bit_for_bit() {
     assert!(
         header.contains(
             "property double nz\nproperty uchar red\nproperty uchar green\nproperty uchar blue\n\
-             property float intensity\nproperty double k1\n"
+             property float intensity\nproperty double scalar_k1\n"
         ),
         "{header}"
     );
@@ -122,6 +122,56 @@ fn ply_colour_and_intensity_survive_curvature_bit_for_bit() {
         panic!("status is not int32");
     };
     assert!(status.iter().all(|&s| s == 0));
+}
+
+#[test]
+fn an_earlier_ply_output_is_read_by_its_column_names_and_quality_is_renamed() {
+    // As mlscurv writes a curvature PLY: `scalar_k1`, and `quality` repeating `mean`.
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("earlier.ply");
+    write_coloured_ply(&input, &["scalar_k1", "quality"]);
+    let csv = dir.path().join("out.csv");
+    let run = run_ok(
+        mlscurv()
+            .arg("curvature")
+            .arg(&input)
+            .arg("-o")
+            .arg(&csv)
+            .arg("--quiet"),
+    );
+    assert_eq!(
+        run.stderr,
+        format!(
+            "mlscurv: note: {}: the output has columns of these names of its own, so the \
+             input's attributes are written as: `k1` as `k1_in`, `quality` as `quality_in`\n",
+            input.display()
+        )
+    );
+    let table = Table::parse_csv(&std::fs::read_to_string(&csv).unwrap());
+    let expected = JET_HEADER.replace("nz,k1,", "nz,red,green,blue,intensity,k1_in,quality_in,k1,");
+    assert_eq!(table.header.join(","), expected);
+    assert!(table.column("quality_in").iter().all(|&v| v == 0.5));
+    // As PLY: each under `scalar_`, and this run's mean as `quality`.
+    let ply = dir.path().join("out.ply");
+    run_ok(
+        mlscurv()
+            .arg("curvature")
+            .arg(&input)
+            .arg("-o")
+            .arg(&ply)
+            .args(["--quiet", "--ascii"]),
+    );
+    let text = std::fs::read_to_string(&ply).unwrap();
+    assert!(
+        text.contains(
+            "property float intensity\nproperty float scalar_k1_in\n\
+             property float scalar_quality_in\nproperty double scalar_k1\n"
+        ),
+        "{text:.900}"
+    );
+    assert!(text.contains("property int scalar_status\nproperty double quality\nend_header\n"));
+    let table = Table::parse_ascii_ply(&text);
+    assert_eq!(table.header.join(","), expected);
 }
 
 #[test]

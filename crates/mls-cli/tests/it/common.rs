@@ -136,12 +136,14 @@ pub struct Table {
 }
 
 impl Table {
-    /// Parses CSV with a header row (every value a number, `NaN` allowed).
+    /// Parses CSV with a header row after `//`, as mlscurv writes it (every value a number,
+    /// `NaN` allowed).
     pub fn parse_csv(text: &str) -> Self {
         let mut lines = text.lines();
-        let header: Vec<String> = lines
-            .next()
-            .expect("CSV has no header")
+        let first = lines.next().expect("CSV has no header");
+        let header: Vec<String> = first
+            .strip_prefix("//")
+            .unwrap_or_else(|| panic!("CSV header without `//`: {first:?}"))
             .split(',')
             .map(str::to_owned)
             .collect();
@@ -152,8 +154,33 @@ impl Table {
         Self { header, rows }
     }
 
-    /// Parses an ASCII PLY whose first element is `vertex` (independent of mls-io's reader).
+    /// Parses an ASCII PLY whose first element is `vertex` (independent of mls-io's reader),
+    /// naming the columns as mlscurv does: property `scalar_k1` is column `k1`, and a
+    /// `quality` property, which must repeat `mean`, is left out.
     pub fn parse_ascii_ply(text: &str) -> Self {
+        let mut table = Self::parse_ascii_ply_properties(text);
+        for name in &mut table.header {
+            if let Some(bare) = name.strip_prefix("scalar_") {
+                *name = bare.to_owned();
+            }
+        }
+        if let Some(q) = table.header.iter().position(|h| h == "quality") {
+            let mean = table.col("mean");
+            for row in &mut table.rows {
+                let quality = row.remove(q);
+                assert!(
+                    quality.to_bits() == row[mean - usize::from(mean > q)].to_bits(),
+                    "quality {quality} is not mean"
+                );
+            }
+            table.header.remove(q);
+        }
+        table
+    }
+
+    /// Parses an ASCII PLY whose first element is `vertex`, each column named as its
+    /// property.
+    pub fn parse_ascii_ply_properties(text: &str) -> Self {
         let mut lines = text.lines();
         assert_eq!(lines.next(), Some("ply"));
         assert_eq!(lines.next(), Some("format ascii 1.0"));

@@ -63,7 +63,7 @@ static BUNNY: LazyLock<BunnyCurvature> = LazyLock::new(|| {
 #[test]
 fn csv_has_the_documented_header_and_one_row_per_input_point_in_input_order() {
     let b = &*BUNNY;
-    assert_eq!(b.csv_text.lines().next(), Some(JET_HEADER));
+    assert_eq!(b.csv_text.lines().next(), Some(&*format!("//{JET_HEADER}")));
     assert_eq!(b.input.points.len(), BUNNY_POINTS);
     assert_eq!(b.table.rows.len(), BUNNY_POINTS);
     // Evaluated at the input points, so x y z are the input coordinates exactly.

@@ -107,7 +107,7 @@ fn far_row() -> usize {
 
 #[test]
 fn eval_prints_the_documented_header_and_one_row_per_query_to_stdout() {
-    assert_eq!(EVAL.lines().next(), Some(EVAL_HEADER));
+    assert_eq!(EVAL.lines().next(), Some(&*format!("//{EVAL_HEADER}")));
     let t = Table::parse_csv(&EVAL);
     let q: Vec<[f64; 3]> = queries().into_iter().map(|(_, p)| p).collect();
     assert_eq!(t.arrays(["x", "y", "z"]), q);

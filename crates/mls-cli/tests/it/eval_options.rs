@@ -175,6 +175,7 @@ fn output_file_format_follows_its_extension() {
     );
     // The same numbers, space-separated after a `#` line of the names.
     let text = fs::read_to_string(&xyz).unwrap();
+    let csv = csv.strip_prefix("//").expect("CSV header after `//`");
     let expected = format!("# {}", csv.replace(',', " "));
     assert_eq!(text, expected);
 }

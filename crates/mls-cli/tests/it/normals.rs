@@ -49,7 +49,7 @@ fn parse_normals_ply(bytes: &[u8]) -> Table {
         "property double nx",
         "property double ny",
         "property double nz",
-        "property int status",
+        "property int scalar_status",
         "end_header",
     ];
     assert_eq!(lines, expected);

@@ -165,13 +165,27 @@ fn vertex_layout(
 /// The empty attribute columns of the vertex element's scalar properties that are not
 /// coordinates or normals, in property order, with room for `capacity` values; a name the
 /// writers could not write (`scalar/Intensity`) gets `_` for each character they refuse.
+/// A property `scalar_name` is the attribute `name` (CloudCompare's convention, which the
+/// writer follows), unless the file has a property `name` too or `name` is a coordinate or
+/// normal.
 fn attribute_columns(vertex: &Element, targets: &[Target], capacity: usize) -> Vec<Attribute> {
+    let declared: HashSet<&str> = vertex.properties.iter().map(|p| p.name.as_str()).collect();
     let mut attributes: Vec<Attribute> = Vec::new();
     let mut taken = HashSet::new();
     for (p, t) in vertex.properties.iter().zip(targets) {
         if let (Target::Attribute(_), PropertyKind::Scalar(ty)) = (t, p.kind) {
+            let name = match p.name.strip_prefix(crate::write::PLY_SCALAR_PREFIX) {
+                Some(bare)
+                    if !bare.is_empty()
+                        && !declared.contains(bare)
+                        && !SLOT_NAMES.contains(&crate::slot_alias(bare)) =>
+                {
+                    bare
+                }
+                _ => &p.name,
+            };
             attributes.push(Attribute {
-                name: usable_name(&p.name, "property", &mut taken),
+                name: usable_name(name, "property", &mut taken),
                 data: AttributeData::with_capacity(ty.attribute_type(), capacity),
             });
         }

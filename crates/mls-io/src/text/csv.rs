@@ -13,7 +13,11 @@ use crate::{CloudBuilder, PointCloud, ReadOutcome, SLOT_NAMES};
 
 /// Reads comma-separated values with a header row naming the columns.
 ///
-/// The first non-blank line is the header. Names are matched case-insensitively after
+/// The first non-blank line is the header, after `//` if it starts with that (as
+/// CloudCompare and the CSV writer write it); fields are separated by commas, or by
+/// semicolons or tabs where the header has those and no comma. A first row holding a single
+/// non-negative integer is the point count CloudCompare's export can write, and is skipped.
+/// Names are matched case-insensitively after
 /// trimming whitespace and surrounding double quotes; `x`, `y`, `z` are required, `nx`, `ny`,
 /// `nz` are optional (all three or none) and any other column is an attribute under its
 /// header name (case kept; each character other than an ASCII letter, digit, `_`, `-` or `.`
@@ -74,9 +78,14 @@ pub(crate) fn read_csv_slots(
     let header = header.trim_start();
     let header = header.strip_prefix("//").unwrap_or(header);
     // A semicolon separates the fields where the header has it and no comma (spreadsheets in
-    // locales with a decimal comma; an option of CloudCompare's export).
-    let separator = if !header.contains(',') && header.contains(';') {
+    // locales with a decimal comma; an option of CloudCompare's export), a tab where it has
+    // neither (another of CloudCompare's).
+    let separator = if header.contains(',') {
+        ','
+    } else if header.contains(';') {
         ';'
+    } else if header.contains('\t') {
+        '\t'
     } else {
         ','
     };
@@ -143,7 +152,15 @@ pub(crate) fn read_csv_slots(
     check_normals(name, header_line, [nx, ny, nz])?;
 
     let mut cloud = CloudBuilder::new(nx, 0);
+    let mut first_row = true;
     while let Some((line, text)) = lines.next_line(name)? {
+        // CloudCompare's export can put the point count on the line after the header.
+        if std::mem::replace(&mut first_row, false)
+            && width > 1
+            && text.trim().parse::<u64>().is_ok()
+        {
+            continue;
+        }
         let mut values = [0.0; 6];
         let mut found = 0;
         for field in CsvFields::new(text, separator) {

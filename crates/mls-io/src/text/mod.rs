@@ -120,8 +120,15 @@ impl UnitCheck {
 ///
 /// Blank lines and lines whose first non-blank character is `#` are ignored. A first data
 /// row holding a single non-negative integer is the point-count line some scanners write at
-/// the top of `.pts` files, and is skipped. The first data row fixes the column count; every
-/// later row must have as many. The columns are read by this rule:
+/// the top of `.pts` files (and CloudCompare after its header), and is skipped. The first
+/// data row fixes the column count; every later row must have as many. A `//` line before
+/// the rows names the columns, split as the rows are (by tabs where both have them), as
+/// CloudCompare writes it, as does a first row of which no field is a number, or else the
+/// last `#` comment before the rows when it has one valid name per column. Such names are
+/// read as [`read_csv`] reads a header's: `x y z nx ny nz` case-insensitively, the others
+/// keeping their case with each character other than a letter, digit, `_`, `-` or `.` as
+/// `_` (CloudCompare's `Mean curvature (0.4)` is `Mean_curvature__0.4_`). The columns are
+/// read by this rule:
 ///
 /// - With [`ReadOptions::columns`], by those names: the count must match, `x y z` and
 ///   `nx ny nz` (if named) are geometry, columns named `_` are skipped unparsed, and every
@@ -213,15 +220,34 @@ impl<'a> Iterator for Fields<'a> {
     }
 }
 
-/// The column names of a row of names (line `line` of `file`), separated as
-/// [`Separator::of`] finds; an error says `what` the row was taken for.
-fn names_row(row: &str, file: &str, line: usize, what: &str) -> Result<ColumnNames, ReadError> {
-    let description = Separator::of(row).fields(row).collect::<Vec<_>>().join(",");
-    ColumnNames::parse(&description).map_err(|message| ReadError::Header {
+/// The column names of a row of names (line `line` of `file`), split by `separator`; an
+/// error says `what` the row was taken for.
+fn names_row(
+    row: &str,
+    separator: Separator,
+    file: &str,
+    line: usize,
+    what: &str,
+) -> Result<ColumnNames, ReadError> {
+    let fields: Vec<&str> = separator.fields(row).collect();
+    ColumnNames::from_header(&fields).map_err(|message| ReadError::Header {
         file: file.to_owned(),
         line,
         message: format!("{what}: {message}"),
     })
+}
+
+/// The separator of a `//` header line, given the first row of values' separator `data`:
+/// the same character; for whitespace-separated values, tabs if both have them (then the
+/// names may hold spaces, as CloudCompare's tab-separated export writes them), else
+/// whitespace (CloudCompare's space-separated export writes a space in a name as `_`).
+fn header_separator(header: &str, data: Separator, row: &str) -> Separator {
+    match data {
+        Separator::Whitespace if header.contains('\t') && row.contains('\t') => {
+            Separator::Char('\t')
+        }
+        other => other,
+    }
 }
 
 /// [`read_xyz_with`], reading the leading [`SLOT_NAMES`] `slots` as geometry and any other
@@ -239,8 +265,10 @@ pub(crate) fn read_xyz_slots(
     let mut check: Option<UnitCheck> = None;
     let mut attributes = TextAttributes::default();
     // Column names from the file itself: CloudCompare writes them as a comment before the
-    // rows, `//X Y Z Nx Ny Nz`; `--columns` overrides them.
+    // rows, `//X Y Z Nx Ny Nz`; `--columns` overrides them. Split once the first row of
+    // values shows the separator.
     let mut named: Option<(ColumnNames, usize)> = None;
+    let mut slashes: Option<(String, usize)> = None;
     // The last `#` comment before the first row: the names when it has one per column
     // (mlscurv writes `# x y z nx ny nz k1 ...`).
     let mut comment: Option<(String, usize)> = None;
@@ -254,9 +282,8 @@ pub(crate) fn read_xyz_slots(
             continue;
         }
         if let Some(header) = text.trim_start().strip_prefix("//") {
-            if roles.is_empty() && options.columns.is_none() && named.is_none() {
-                let columns = names_row(header, name, line, "column names after `//`")?;
-                named = Some((columns, line));
+            if roles.is_empty() && options.columns.is_none() && slashes.is_none() {
+                slashes = Some((header.to_owned(), line));
             }
             continue;
         }
@@ -279,11 +306,17 @@ pub(crate) fn read_xyz_slots(
             // Numbers written with a decimal comma are numbers here (refused below, saying so).
             let number = |t: &str| t.replacen(',', ".", 1).parse::<f64>().is_ok();
             if first && found >= 3 && !separator.fields(text).any(number) {
-                if options.columns.is_none() && named.is_none() {
-                    let columns = names_row(text, name, line, "the first row names the columns")?;
+                if options.columns.is_none() && slashes.is_none() {
+                    let what = "the first row names the columns";
+                    let columns = names_row(text, separator, name, line, what)?;
                     named = Some((columns, line));
                 }
                 continue;
+            }
+            if let Some((header, at)) = slashes.take() {
+                let split = header_separator(&header, separator, text);
+                let what = "column names after `//`";
+                named = Some((names_row(&header, split, name, at, what)?, at));
             }
             // CloudCompare's `.asc` is a point cloud; ESRI's `.asc` is a height raster,
             // which begins `ncols N`.

@@ -103,7 +103,8 @@ impl ColumnData<'_> {
 /// A named column of a table to write.
 #[derive(Clone, Copy, Debug)]
 pub struct Column<'a> {
-    /// The property (PLY) or header (CSV) name: ASCII letters, digits, `_`, `-` or `.`.
+    /// The header (CSV) name, and the PLY property's after `scalar_` unless it is a standard
+    /// one ([`write_ply`]): ASCII letters, digits, `_`, `-` or `.`.
     pub name: &'a str,
     /// The values, one per row.
     pub data: ColumnData<'a>,
@@ -158,6 +159,12 @@ pub enum PlyFormat {
 pub struct WriteOptions<'a> {
     /// The encoding of PLY output.
     pub ply_format: PlyFormat,
+    /// For PLY output, the column also written as the vertex property `quality`, after the
+    /// others: MeshLab reads no other per-vertex value of a PLY file (its importer maps
+    /// `quality` to the vertex quality and ignores every property it does not know). Not
+    /// written when no column has this name or one is named `quality` already. Ignored for
+    /// other formats.
+    pub ply_quality: Option<&'a str>,
     /// For LAS/LAZ output, the layout of the LAS input the table came from
     /// ([`PointCloud::las`](crate::PointCloud::las)): its point format (without waveform
     /// data), scale and offset, GPS time type, coordinate-system records, and the standard
@@ -167,8 +174,8 @@ pub struct WriteOptions<'a> {
 }
 
 /// Writes `columns` to `path` in the format its extension names (case-insensitive): `.ply`
-/// (in `ply_format`), `.csv`, `.xyz`, `.txt`, `.pts`, `.asc` (space-separated after a `#` line of
-/// column names), or `.las`, `.laz` ([`write_las`]).
+/// (in `ply_format`; [`write_ply`]), `.csv` ([`write_csv`]), `.xyz`, `.txt`, `.pts`, `.asc`
+/// (space-separated after a `#` line of column names), or `.las`, `.laz` ([`write_las`]).
 ///
 /// For points and normals only, pass [`PointCloud::columns`](crate::PointCloud::columns).
 ///
@@ -200,7 +207,7 @@ pub fn write_point_cloud_as(
 ) -> Result<(), WriteError> {
     let options = WriteOptions {
         ply_format,
-        las: None,
+        ..WriteOptions::default()
     };
     write_point_cloud_as_with(path, format, columns, &options)
 }
@@ -217,7 +224,14 @@ pub fn write_point_cloud_as_with(
     options: &WriteOptions<'_>,
 ) -> Result<(), WriteError> {
     match format {
-        FileFormat::Ply => write_ply(path, columns, options.ply_format),
+        FileFormat::Ply => {
+            let file = path.display().to_string();
+            let rows = validate(&file, columns)?;
+            let columns = with_quality(columns, options.ply_quality);
+            write_atomically(path, |out| {
+                write_ply_rows(out, &file, &columns, rows, options.ply_format)
+            })
+        }
         FileFormat::Csv => write_csv(path, columns),
         FileFormat::Xyz => write_xyz(path, columns),
         FileFormat::Las | FileFormat::Laz => {
@@ -249,7 +263,7 @@ pub fn write_point_cloud_to(
 ) -> Result<(), WriteError> {
     let options = WriteOptions {
         ply_format,
-        las: None,
+        ..WriteOptions::default()
     };
     write_point_cloud_to_with(writer, name, format, columns, &options)
 }
@@ -267,7 +281,12 @@ pub fn write_point_cloud_to_with(
     options: &WriteOptions<'_>,
 ) -> Result<(), WriteError> {
     match format {
-        FileFormat::Ply => write_ply_to(writer, name, columns, options.ply_format),
+        FileFormat::Ply => write_ply_to(
+            writer,
+            name,
+            &with_quality(columns, options.ply_quality),
+            options.ply_format,
+        ),
         FileFormat::Csv => write_csv_to(writer, name, columns),
         FileFormat::Xyz => write_xyz_to(writer, name, columns),
         FileFormat::Las => crate::las::write_stream(writer, name, columns, false, options.las),
@@ -279,8 +298,64 @@ pub fn write_point_cloud_to_with(
     }
 }
 
+/// The columns, and `quality` as a copy of the column named `mirror` when there is one and
+/// no column is named `quality` ([`WriteOptions::ply_quality`]).
+fn with_quality<'a>(columns: &[Column<'a>], mirror: Option<&str>) -> Vec<Column<'a>> {
+    let mut all = columns.to_vec();
+    let source = mirror.and_then(|m| columns.iter().find(|c| c.name == m));
+    if let Some(source) = source
+        && !columns.iter().any(|c| c.name == QUALITY)
+    {
+        all.push(Column {
+            name: QUALITY,
+            data: source.data,
+        });
+    }
+    all
+}
+
+/// MeshLab's per-vertex scalar: the one PLY vertex property it reads beside the geometry and
+/// colour.
+const QUALITY: &str = "quality";
+
+/// Vertex property names written as they are; every other column `name` is written as the
+/// property `scalar_name`. CloudCompare loads a vertex property as a scalar field only when
+/// its name contains `scal` (its command line loads nothing else; its dialog preselects
+/// nothing else), and takes `scalar_name` as the field `name` (`PlyFilter.cpp`); these are
+/// the names other programs know by themselves: the geometry, colour (CloudCompare, MeshLab,
+/// Open3D), MeshLab's `quality`, and `intensity` (PCL, and a scalar field in CloudCompare).
+pub(crate) const PLY_PLAIN_NAMES: [&str; 12] = [
+    "x",
+    "y",
+    "z",
+    "nx",
+    "ny",
+    "nz",
+    "red",
+    "green",
+    "blue",
+    "alpha",
+    QUALITY,
+    "intensity",
+];
+
+/// The prefix of the PLY vertex property of a column not in [`PLY_PLAIN_NAMES`].
+pub(crate) const PLY_SCALAR_PREFIX: &str = "scalar_";
+
+/// The PLY vertex property name of column `name`.
+pub(crate) fn ply_property_name(name: &str) -> std::borrow::Cow<'_, str> {
+    if PLY_PLAIN_NAMES.contains(&name) {
+        name.into()
+    } else {
+        format!("{PLY_SCALAR_PREFIX}{name}").into()
+    }
+}
+
 /// Writes `columns` as the `vertex` element of a PLY file, atomically: float columns as
-/// `double`, integer columns as `int`, rows in input order.
+/// `double`, integer columns as `int`, rows in input order. A column is the property of its
+/// name if that is a standard one (`x y z nx ny nz red green blue alpha quality
+/// intensity`), else `scalar_` and its name (`k1` is `scalar_k1`), which CloudCompare loads
+/// as the scalar field `k1` and [`read_ply`](crate::read_ply) reads as `k1` again.
 ///
 /// # Errors
 /// [`WriteError::NoColumns`], [`WriteError::InvalidColumnName`],
@@ -295,8 +370,9 @@ pub fn write_ply(path: &Path, columns: &[Column<'_>], format: PlyFormat) -> Resu
     })
 }
 
-/// Writes `columns` as CSV, atomically: a header row of the names, then one row per point,
-/// floats in the shortest form that parses back to the same `f64`.
+/// Writes `columns` as CSV, atomically: a header row of the names after `//`
+/// (`//x,y,z,k1,...`, CloudCompare's form, which [`read_csv`](crate::read_csv) reads too),
+/// then one row per point, floats in the shortest form that parses back to the same `f64`.
 ///
 /// # Errors
 /// As for [`write_ply`].

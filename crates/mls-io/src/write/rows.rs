@@ -54,7 +54,7 @@ pub(super) fn write_ply_rows(
             header,
             "property {} {}",
             column.data.ply_type(),
-            column.name
+            super::ply_property_name(column.name)
         );
     }
     header.push_str("end_header\n");
@@ -88,7 +88,9 @@ fn write_binary_rows(
 pub(super) enum TextHeader {
     /// Nothing (the body of an ASCII PLY, whose header names the properties).
     None,
-    /// A row of the names (CSV).
+    /// A row of the names after `//` (CSV): CloudCompare takes the names of its scalar
+    /// fields only from a first line starting with `//` (it reads any other first line as
+    /// a row of values, reports it corrupted and names the fields `Scalar field #N`).
     Names,
     /// A `#` comment line of the names (XYZ), which readers of such files skip.
     Comment,
@@ -106,7 +108,7 @@ pub(super) fn write_text_rows(
     let names: Vec<&str> = columns.iter().map(|c| c.name).collect();
     let line = match header {
         TextHeader::None => None,
-        TextHeader::Names => Some(names.join(&separator.to_string()) + "\n"),
+        TextHeader::Names => Some(format!("//{}\n", names.join(&separator.to_string()))),
         TextHeader::Comment => Some(format!("# {}\n", names.join(&separator.to_string()))),
     };
     if let Some(line) = line {

@@ -82,7 +82,7 @@ fn successful_write_replaces_an_existing_file() {
     write_csv(&path, &columns()).unwrap();
     assert_eq!(
         fs::read_to_string(&path).unwrap(),
-        "x,y,z\n1.0,1.0,1.0\n2.0,2.0,2.0\n3.0,3.0,3.0\n"
+        "//x,y,z\n1.0,1.0,1.0\n2.0,2.0,2.0\n3.0,3.0,3.0\n"
     );
     assert_eq!(listing(dir.path()), ["out.csv"]);
 }
@@ -154,7 +154,11 @@ fn symbolic_link_is_kept_and_its_target_replaced() {
             .file_type()
             .is_symlink()
     );
-    assert!(fs::read_to_string(&target).unwrap().starts_with("x,y,z\n"));
+    assert!(
+        fs::read_to_string(&target)
+            .unwrap()
+            .starts_with("//x,y,z\n")
+    );
     assert_eq!(listing(dir.path()), ["data", "link.csv"]);
     assert_eq!(listing(&dir.path().join("data")), ["real.csv"]);
 }

@@ -7,8 +7,8 @@ use std::fmt::Write as _;
 use las::point::{Classification, Format, ScanDirection};
 use las::{Builder, Color, Point, Reader, Transform, Vector, Version, Vlr, Writer};
 use mls_io::{
-    Attribute, AttributeData, Axis, Column, FileFormat, PlyFormat, WriteOptions, read_csv_with,
-    read_ply, read_point_cloud_from_with, write_ply_to, write_point_cloud,
+    Attribute, AttributeData, Axis, Column, FileFormat, PlyFormat, PointCloud, WriteOptions,
+    read_csv_with, read_ply, read_point_cloud_from_with, write_ply_to, write_point_cloud,
     write_point_cloud_as_with,
 };
 
@@ -138,7 +138,7 @@ fn ply_properties_are_read_in_their_types_and_written_back_bit_for_bit() {
                 assert!(
                     text.contains(
                         "property uchar red\nproperty uchar green\nproperty uchar blue\n\
-                         property float intensity\nproperty char class\nproperty short label\n"
+                         property float intensity\nproperty char scalar_class\nproperty short scalar_label\n"
                     ),
                     "{text}"
                 );
@@ -223,18 +223,95 @@ fn csv_columns_beyond_the_geometry_are_attributes_under_their_header_names() {
 
 #[test]
 fn ply_property_names_the_writers_cannot_write_are_mended() {
+    // `scalar_Intensity` is CloudCompare's scalar field `Intensity`; `scalar/Intensity` is
+    // not of that form and only loses its slash.
     let text = "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n\
                 property float z\nproperty float scalar/Intensity\nproperty uchar scalar_Intensity\n\
-                end_header\n1 2 3 0.5 7\n";
+                property uchar scalar_(0.4)\nend_header\n1 2 3 0.5 7 9\n";
     let cloud = read_ply(text.as_bytes(), "cc.ply").unwrap();
     let names: Vec<&str> = cloud.attributes.iter().map(|a| a.name.as_str()).collect();
-    assert_eq!(names, ["scalar_Intensity", "scalar_Intensity_2"]);
+    assert_eq!(names, ["scalar_Intensity", "Intensity", "_0.4_"]);
     let mut csv = Vec::new();
     mls_io::write_csv_to(&mut csv, "o.csv", &cloud.columns()).unwrap();
     assert_eq!(
         String::from_utf8(csv).unwrap(),
-        "x,y,z,scalar_Intensity,scalar_Intensity_2\n1.0,2.0,3.0,0.5,7\n"
+        "//x,y,z,scalar_Intensity,Intensity,_0.4_\n1.0,2.0,3.0,0.5,7,9\n"
     );
+}
+
+#[test]
+fn ply_scalar_prefix_is_written_and_read_back() {
+    let cloud = PointCloud {
+        points: vec![[1.0, 2.0, 3.0]],
+        normals: Some(vec![[0.0, 0.0, 1.0]]),
+        attributes: vec![
+            Attribute {
+                name: "red".to_owned(),
+                data: AttributeData::U8(vec![200]),
+            },
+            Attribute {
+                name: "k1".to_owned(),
+                data: AttributeData::F64(vec![-0.25]),
+            },
+            Attribute {
+                name: "mean".to_owned(),
+                data: AttributeData::F64(vec![1.5]),
+            },
+        ],
+        ..PointCloud::default()
+    };
+    let options = WriteOptions {
+        ply_format: PlyFormat::Ascii,
+        ply_quality: Some("mean"),
+        ..WriteOptions::default()
+    };
+    let mut bytes = Vec::new();
+    mls_io::write_point_cloud_to_with(
+        &mut bytes,
+        "o.ply",
+        FileFormat::Ply,
+        &cloud.columns(),
+        &options,
+    )
+    .unwrap();
+    let text = String::from_utf8(bytes.clone()).unwrap();
+    assert!(
+        text.contains(
+            "property double nz\nproperty uchar red\nproperty double scalar_k1\n\
+             property double scalar_mean\nproperty double quality\nend_header\n\
+             1.0 2.0 3.0 0.0 0.0 1.0 200 -0.25 1.5 1.5\n"
+        ),
+        "{text}"
+    );
+    // Read back under the columns' names; the copy is an attribute `quality`.
+    let back = read_ply(&bytes[..], "o.ply").unwrap();
+    let names: Vec<&str> = back.attributes.iter().map(|a| a.name.as_str()).collect();
+    assert_eq!(names, ["red", "k1", "mean", "quality"]);
+    assert_eq!(back.attributes[..3], cloud.attributes[..]);
+    // The older unprefixed names read the same; a file with both keeps the prefix.
+    let old = "ply\nformat ascii 1.0\nelement vertex 1\nproperty double x\nproperty double y\n\
+               property double z\nproperty double k1\nproperty double scalar_k1\n\
+               property double scalar_x\nend_header\n1 2 3 4 5 6\n";
+    let back = read_ply(old.as_bytes(), "old.ply").unwrap();
+    let names: Vec<&str> = back.attributes.iter().map(|a| a.name.as_str()).collect();
+    assert_eq!(names, ["k1", "scalar_k1", "scalar_x"]);
+    // An existing `quality` column is not doubled.
+    let mut with_quality = cloud.clone();
+    with_quality.attributes.push(Attribute {
+        name: "quality".to_owned(),
+        data: AttributeData::F32(vec![0.5]),
+    });
+    let mut bytes = Vec::new();
+    mls_io::write_point_cloud_to_with(
+        &mut bytes,
+        "o.ply",
+        FileFormat::Ply,
+        &with_quality.columns(),
+        &options,
+    )
+    .unwrap();
+    let back = read_ply(&bytes[..], "o.ply").unwrap();
+    assert_eq!(back.attributes, with_quality.attributes);
 }
 
 /// A LAS point of format `format` with every field set from `i`.
@@ -414,7 +491,7 @@ fn las_dimensions_and_extra_bytes_go_back_where_they_came_from() {
         write_ply_to(&mut ply, "o.ply", &cloud.columns(), PlyFormat::Ascii).unwrap();
         let text = String::from_utf8_lossy(&ply);
         assert!(text.contains("property ushort intensity\n"), "{text}");
-        assert!(text.contains("property double gps_time\n"), "{text}");
+        assert!(text.contains("property double scalar_gps_time\n"), "{text}");
         let back = read_ply(&ply[..], "o.ply").unwrap();
         assert_eq!(back.attributes, cloud.attributes);
     }

@@ -2,6 +2,7 @@
 
 mod atomic;
 mod attributes;
+mod cloudcompare;
 mod e57;
 mod fuzz;
 mod las;

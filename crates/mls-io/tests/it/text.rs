@@ -125,7 +125,7 @@ fn xyz_column_names_from_a_cloudcompare_header() {
     let cloud = read_xyz("//X Y Z R G B\n1 2 3 1 0 0\n".as_bytes(), "rgb.txt").unwrap();
     assert_eq!(cloud.normals, None);
     let names: Vec<&str> = cloud.attributes.iter().map(|a| a.name.as_str()).collect();
-    assert_eq!(names, ["r", "g", "b"]);
+    assert_eq!(names, ["R", "G", "B"]);
     // --columns overrides the file's names; a later `//` line is a comment.
     let outcome = read_with(
         "//X Y Z Nx Ny Nz\n1 2 3 0 0 1\n// end\n",
@@ -138,7 +138,7 @@ fn xyz_column_names_from_a_cloudcompare_header() {
     let err = read_xyz("//X Y Z Scalar field\n1 2 3 4\n".as_bytes(), "sf.txt").unwrap_err();
     assert_eq!(
         err.to_string(),
-        "sf.txt: line 2: 4 columns, but the `//` line 1 names x,y,z,scalar,field"
+        "sf.txt: line 2: 4 columns, but the `//` line 1 names x,y,z,Scalar,field"
     );
     let err = read_xyz("//X Y W\n1 2 3\n".as_bytes(), "w.txt").unwrap_err();
     assert!(
