@@ -16,6 +16,7 @@ mod paper;
 mod robustness;
 mod validate;
 mod validate_adaptive;
+mod validate_defaults;
 mod validate_formulas;
 mod validate_jet;
 mod validate_shapes;

@@ -92,6 +92,7 @@ pub(crate) enum Q {
     JetChoice,
     StreamBitwise,
     SpacingH,
+    Defaults,
 }
 
 /// A row: its name, the threshold above which the run fails, the production entry point and
@@ -104,7 +105,7 @@ struct Row {
 
 /// The streams the CLI runs; their results are bitwise one unchunked call's (stream row).
 const CURV: &str = "`curvature_stream`, `projection_stream` / `mls_ad::witness`";
-const ROWS: [Row; 32] = [
+const ROWS: [Row; 33] = [
     row("n", THRESHOLD, CURV),
     row("J", THRESHOLD, CURV),
     row("∂²n", THRESHOLD, CURV),
@@ -205,6 +206,11 @@ const ROWS: [Row; 32] = [
         SPACING_THRESHOLD,
         "`spacing_statistics`, `suggest_h` / `mls_ad::spacing_witness`",
     ),
+    row(
+        "documented defaults",
+        0.0,
+        "`JetConfig::default()`, `NormalsConfig::default()`, `MlsConfig::new`, `AdaptiveConfig::new`, the jet's and normals' constants / `mls_ad::documented` (README.md, docs/)",
+    ),
 ];
 
 const fn row(name: &'static str, threshold: f64, entry: &'static str) -> Row {
@@ -231,7 +237,7 @@ pub(crate) struct JetChoices {
     error: f64,
 }
 
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug)]
 pub(crate) struct Tally {
     worst: [Worst; ROWS.len()],
     pub evals: usize,
@@ -242,6 +248,19 @@ pub(crate) struct Tally {
     /// The jet's choices (degree, and support of a degree-2 candidate) per kind of cloud and
     /// normal data.
     pub jet_choices: BTreeMap<(&'static str, String), JetChoices>,
+}
+
+// By hand: arrays implement `Default` only up to 32 elements.
+impl Default for Tally {
+    fn default() -> Self {
+        Self {
+            worst: [Worst::default(); ROWS.len()],
+            evals: 0,
+            skipped: 0,
+            entries: BTreeMap::new(),
+            jet_choices: BTreeMap::new(),
+        }
+    }
 }
 
 impl Tally {
@@ -312,6 +331,7 @@ pub(crate) fn run(o: &Options) -> Result<()> {
         o.seed,
         if o.quick { 20_000 } else { 200_000 },
     );
+    let (defaults_table, defaults_failed) = crate::validate_defaults::check(&mut tally);
     let elapsed = start.elapsed().as_secs_f64();
     writeln!(
         report,
@@ -348,6 +368,8 @@ pub(crate) fn run(o: &Options) -> Result<()> {
             unreached.push(row.name);
         }
     }
+    failed.extend(defaults_failed);
+    report.push_str(&defaults_table);
     if !unreached.is_empty() {
         failed.push(format!(
             "rows that compared nothing ({}; too few cases to reach them? --evals sets the sweep's size)",

@@ -139,14 +139,19 @@ pub(crate) fn one_case(seed: u64, queries: usize) -> Tally {
         normals.push(normal);
         offsets.push(offset);
     }
-    let radius = surface.kernel().support_radius();
+    // The witness's support and fewest neighbours as documented (`mls_ad::documented`), not
+    // taken from the surface: a changed default must fail here.
+    let radius = match cutoff {
+        Cutoff::None => None,
+        _ => Some(mls_ad::documented::CUTOFF * patch.h),
+    };
     let ctx = Ctx {
         seed,
         h: patch.h,
         a,
         samples: &samples,
         radius,
-        min_neighbours: config.min_neighbours,
+        min_neighbours: mls_ad::documented::MIN_NEIGHBOURS,
     };
 
     // The CLI's path: the stream, in chunks of a random size, against the witness.
@@ -289,15 +294,22 @@ fn check_spacing(tally: &mut Tally, seed: u64, patch: &cases::Patch, rng: &mut C
         let copy = points[rng.random_range(0..points.len())];
         points.push(copy);
     }
-    let k = if rng.random_bool(0.5) {
-        DEFAULT_SPACING_NEIGHBOURS
+    // The defaults (the CLI's) on production's side, their documented values on the
+    // witness's.
+    let (k, witness_k) = if rng.random_bool(0.5) {
+        (
+            DEFAULT_SPACING_NEIGHBOURS,
+            mls_ad::documented::SPACING_NEIGHBOURS,
+        )
     } else {
-        rng.random_range(1..=24)
+        let k = rng.random_range(1..=24);
+        (k, k)
     };
-    let factor = if rng.random_bool(0.5) {
-        DEFAULT_H_FACTOR
+    let (factor, witness_factor) = if rng.random_bool(0.5) {
+        (DEFAULT_H_FACTOR, mls_ad::documented::H_FACTOR)
     } else {
-        rng.random_range(0.5..4.0)
+        let f = rng.random_range(0.5..4.0);
+        (f, f)
     };
     let variant = Variant::random(rng);
     let production = variant.run(|par| {
@@ -305,7 +317,7 @@ fn check_spacing(tally: &mut Tally, seed: u64, patch: &cases::Patch, rng: &mut C
             .and_then(|stats| Ok((stats, suggest_h(&stats, factor)?)))
     });
     tally.entry(variant.name("spacing_statistics"), 1);
-    let witness = mls_ad::spacing_witness(&points, k, factor);
+    let witness = mls_ad::spacing_witness(&points, witness_k, witness_factor);
     let value = match (production, witness) {
         (Ok((stats, h)), Some(w)) if (stats.k, stats.distinct) == (w.k, w.distinct) => {
             (h - w.h).abs() / w.h
@@ -446,7 +458,7 @@ fn check_normals(tally: &mut Tally, seed: u64, patch: &cases::Patch, rng: &mut C
         let w = mls_ad::normal_witness(
             i,
             &patch.points,
-            config.k,
+            mls_ad::documented::NORMAL_NEIGHBOURS,
             patch.h,
             DEFAULT_DEGENERACY_TOLERANCE,
         );

@@ -8,6 +8,7 @@
 //! dual-number code lives here and nowhere else.
 
 mod adaptive;
+pub mod documented;
 mod jet;
 mod jet_quadratic;
 mod line;
