@@ -96,6 +96,7 @@ pub(crate) enum Q {
     OrientOutward,
     OrientSheet,
     PairAgreement,
+    PerQuery,
 }
 
 /// A row: its name, the threshold above which the run fails, the production entry point and
@@ -108,7 +109,7 @@ struct Row {
 
 /// The streams the CLI runs; their results are bitwise one unchunked call's (stream row).
 const CURV: &str = "`curvature_stream`, `projection_stream` / `mls_ad::witness`";
-const ROWS: [Row; 36] = [
+const ROWS: [Row; 37] = [
     row("n", THRESHOLD, CURV),
     row("J", THRESHOLD, CURV),
     row("∂²n", THRESHOLD, CURV),
@@ -228,6 +229,11 @@ const ROWS: [Row; 36] = [
         "neighbour pairs that agree, as the summary prints it",
         0.0,
         "`mls_cli::pipeline::normals`'s summary / `mls_ad::pair_agreement` (16 nearest by brute force, the 60° and 15° rules)",
+    ),
+    row(
+        "n, g, k1, k2 at queries spread wider than the support (per query)",
+        THRESHOLD,
+        "`Evaluator::curvature_at` (support from `samples_within`) / `mls_ad::witness`, `mls_ad::classify`",
     ),
 ];
 

@@ -168,6 +168,28 @@ pub(crate) fn one_case(seed: u64, queries: usize) -> Tally {
         ctx.check_point(&mut tally, x, r);
     }
 
+    // Queries spread wider than the support, one at a time through the per-query evaluator
+    // (`Evaluator::curvature_at`, whose support `SampleIndex::samples_within` gathers; the
+    // clustered streams above gather theirs in storage order and never reach it): samples
+    // anywhere in the patch (up to 6.5h from its centre, sparse near its rim), moved up to
+    // ±2h along a random direction.
+    let mut evaluator = surface.evaluator();
+    for _ in 0..SCATTERED_QUERIES {
+        let p = patch.points[rng.random_range(0..patch.points.len())];
+        let d = Vector::new(
+            rng.random_range(-1.0..1.0),
+            rng.random_range(-1.0..1.0),
+            rng.random_range(-1.0..1.0),
+        );
+        let x = p + d * (2.0 * patch.h * rng.random_range(0.0..1.0) / d.norm().max(1e-3));
+        let r = evaluator.curvature_at(&x);
+        ctx.check_per_query(&mut tally, &x, &r);
+    }
+    tally.entry(
+        "`Evaluator::curvature_at`, scattered queries".into(),
+        SCATTERED_QUERIES,
+    );
+
     // The projection from the queries within h/2 of the surface (about h off it lie the
     // spurious sheets of energy maxima, beyond which a failed projection is right).
     let near: Vec<Point> = points
@@ -328,6 +350,9 @@ fn check_spacing(tally: &mut Tally, seed: u64, patch: &cases::Patch, rng: &mut C
     tally.record(Q::SpacingH, value, seed);
 }
 
+/// Queries per case spread wider than the support, through `Evaluator::curvature_at`.
+const SCATTERED_QUERIES: usize = 6;
+
 /// What every check of one case needs.
 struct Ctx<'a> {
     seed: u64,
@@ -356,6 +381,35 @@ impl Ctx<'_> {
             }
             _ => tally.record(Q::Status, 1.0, self.seed),
         }
+    }
+
+    /// A result of the per-query evaluator at `x` against the witness: n, g, k1 and k2 as in
+    /// their rows, the largest of them recorded in the per-query row, or 1 where the status
+    /// differs from the witness's verdict.
+    fn check_per_query(&self, tally: &mut Tally, x: &Point, r: &mls_core::PointResult) {
+        let support = mls_ad::support(&x.coords, self.samples, self.radius);
+        let verdict = mls_ad::classify(&x.coords, &support, self.a, self.min_neighbours);
+        let value = match (r, verdict) {
+            (Ok(closed), Ok(w)) => {
+                let imp = &closed.implicit;
+                let rescale = (w.log_scale - imp.log_scale).exp();
+                let gnorm = w.gradient.norm();
+                let kappa = w.hessian.norm() / gnorm;
+                let wc = mls_ad::witness_curvature(&w.gradient, &w.hessian);
+                let c = &closed.curvature;
+                [
+                    (imp.field.normal - w.normal).norm(),
+                    (imp.value * rescale - w.value).abs() / (gnorm * self.h),
+                    (c.k1 - wc.k1).abs() / kappa,
+                    (c.k2 - wc.k2).abs() / kappa,
+                ]
+                .into_iter()
+                .fold(0.0, f64::max)
+            }
+            (Err(s), Err(ws)) if *s == ws => 0.0,
+            _ => 1.0,
+        };
+        tally.record(Q::PerQuery, value, self.seed);
     }
 
     /// A projected point: e′(0) vanishes along n there and e″(0) is not negative; the
