@@ -41,6 +41,9 @@ const SHAPES: [Shape; 6] = [
     Shape::SheetViewpoint,
 ];
 
+/// The torus's major radius (its core circle's, about the z axis through its centre).
+const TORUS_MAJOR: f64 = 1.0;
+
 /// One cloud: its points, per point the direction its oriented normal must face (outward, or
 /// the sheet's upper side), and the `--orient` the command gets.
 struct Cloud {
@@ -98,13 +101,16 @@ fn cloud(shape: Shape, rng: &mut ChaCha8Rng) -> Cloud {
             )
         }
         Shape::Torus => {
-            // More points: the tube's radius at least about 8 spacings.
+            // Twice the points: the tube's radius 5–11 spacings.
             let minor = rng.random_range(0.3..0.5);
-            let s = Torus { major: 1.0, minor };
+            let s = Torus {
+                major: TORUS_MAJOR,
+                minor,
+            };
             (
                 format!("torus R = 1, r = {minor:.2}"),
                 random_area_uniform(&s, 2 * n, seed),
-                4.0 * std::f64::consts::PI.powi(2) * minor,
+                4.0 * std::f64::consts::PI.powi(2) * TORUS_MAJOR * minor,
             )
         }
         Shape::Cuboid => unreachable!("sampled by `cuboid`"),
@@ -140,7 +146,7 @@ fn cloud(shape: Shape, rng: &mut ChaCha8Rng) -> Cloud {
                 Shape::Cuboid => unreachable!("sampled by `cuboid`"),
                 Shape::Torus => {
                     let radial = Vector::new(d.x, d.y, 0.0);
-                    d - radial.normalize()
+                    d - radial.normalize() * TORUS_MAJOR
                 }
                 Shape::SheetDefault | Shape::SheetViewpoint => {
                     let n = s.surface.normal;
