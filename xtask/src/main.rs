@@ -17,8 +17,10 @@ mod paper;
 mod robustness;
 mod validate;
 mod validate_adaptive;
+mod validate_defaults;
 mod validate_formulas;
 mod validate_jet;
+mod validate_orient;
 mod validate_shapes;
 mod validate_sweep;
 

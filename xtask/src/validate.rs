@@ -92,6 +92,11 @@ pub(crate) enum Q {
     JetChoice,
     StreamBitwise,
     SpacingH,
+    Defaults,
+    OrientOutward,
+    OrientSheet,
+    PairAgreement,
+    PerQuery,
 }
 
 /// A row: its name, the threshold above which the run fails, the production entry point and
@@ -104,7 +109,7 @@ struct Row {
 
 /// The streams the CLI runs; their results are bitwise one unchunked call's (stream row).
 const CURV: &str = "`curvature_stream`, `projection_stream` / `mls_ad::witness`";
-const ROWS: [Row; 32] = [
+const ROWS: [Row; 37] = [
     row("n", THRESHOLD, CURV),
     row("J", THRESHOLD, CURV),
     row("∂²n", THRESHOLD, CURV),
@@ -205,6 +210,31 @@ const ROWS: [Row; 32] = [
         SPACING_THRESHOLD,
         "`spacing_statistics`, `suggest_h` / `mls_ad::spacing_witness`",
     ),
+    row(
+        "documented defaults",
+        0.0,
+        "`JetConfig::default()`, `NormalsConfig::default()`, `MlsConfig::new`, `AdaptiveConfig::new`, the jet's and normals' constants / `mls_ad::documented` (README.md, docs/)",
+    ),
+    row(
+        "oriented normals outward (sphere, ellipsoid, torus, box; share facing in)",
+        0.0,
+        "`mls_cli::pipeline::normals` (estimated, default orientation) / n·∇f > 0, f the shape's implicit function (the box: its face's normal, 3 spacings from the edges)",
+    ),
+    row(
+        "oriented normals up or towards the viewpoint (height fields; share facing away)",
+        0.0,
+        "`mls_cli::pipeline::normals` (default: up for a sheet seen from above; `--orient viewpoint`) / the height field's upper side",
+    ),
+    row(
+        "neighbour pairs that agree, as the summary prints it",
+        0.0,
+        "`mls_cli::pipeline::normals`'s summary / `mls_ad::pair_agreement` (16 nearest by brute force, the 60° and 15° rules)",
+    ),
+    row(
+        "n, g, k1, k2 at queries spread wider than the support (per query)",
+        THRESHOLD,
+        "`Evaluator::curvature_at` (support from `samples_within`) / `mls_ad::witness`, `mls_ad::classify`",
+    ),
 ];
 
 const fn row(name: &'static str, threshold: f64, entry: &'static str) -> Row {
@@ -231,7 +261,7 @@ pub(crate) struct JetChoices {
     error: f64,
 }
 
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug)]
 pub(crate) struct Tally {
     worst: [Worst; ROWS.len()],
     pub evals: usize,
@@ -242,6 +272,19 @@ pub(crate) struct Tally {
     /// The jet's choices (degree, and support of a degree-2 candidate) per kind of cloud and
     /// normal data.
     pub jet_choices: BTreeMap<(&'static str, String), JetChoices>,
+}
+
+// By hand: arrays implement `Default` only up to 32 elements.
+impl Default for Tally {
+    fn default() -> Self {
+        Self {
+            worst: [Worst::default(); ROWS.len()],
+            evals: 0,
+            skipped: 0,
+            entries: BTreeMap::new(),
+            jet_choices: BTreeMap::new(),
+        }
+    }
 }
 
 impl Tally {
@@ -312,6 +355,16 @@ pub(crate) fn run(o: &Options) -> Result<()> {
         o.seed,
         if o.quick { 20_000 } else { 200_000 },
     );
+    let (defaults_table, defaults_failed) = crate::validate_defaults::check(&mut tally);
+    let orientation_table = if o.replay.is_none() {
+        crate::validate_orient::check_orientation(
+            &mut tally,
+            o.seed,
+            if o.quick { 18 } else { 60 },
+        )?
+    } else {
+        String::new()
+    };
     let elapsed = start.elapsed().as_secs_f64();
     writeln!(
         report,
@@ -348,6 +401,9 @@ pub(crate) fn run(o: &Options) -> Result<()> {
             unreached.push(row.name);
         }
     }
+    failed.extend(defaults_failed);
+    report.push_str(&defaults_table);
+    report.push_str(&orientation_table);
     if !unreached.is_empty() {
         failed.push(format!(
             "rows that compared nothing ({}; too few cases to reach them? --evals sets the sweep's size)",
@@ -489,7 +545,7 @@ fn differential(base_seed: u64, target: usize) -> Tally {
     })
 }
 
-fn case_seed(base: u64, case: u64) -> u64 {
+pub(crate) fn case_seed(base: u64, case: u64) -> u64 {
     // SplitMix64 step: distinct, well-mixed seeds per case.
     let mut z = base.wrapping_add(case.wrapping_mul(0x9E37_79B9_7F4A_7C15));
     z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);

@@ -66,10 +66,11 @@ pub(crate) fn check_adaptive(
         .collect();
     let ladder = mls_ad::Ladder {
         h_min: config.h_min,
-        scales: config.scales,
-        confidence: config.confidence,
-        min_h_factor: config.min_h_factor,
-        cutoff: 5.0,
+        // The documented defaults, not the configuration's (`mls_ad::documented`).
+        scales: mls_ad::documented::ADAPTIVE_SCALES,
+        confidence: mls_ad::documented::ADAPTIVE_CONFIDENCE,
+        min_h_factor: mls_ad::documented::ADAPTIVE_MIN_H_FACTOR,
+        cutoff: mls_ad::documented::CUTOFF,
         gain: 2.0,
     };
     // The gain is a measured constant, not a formula: the witness takes the documented value

@@ -34,14 +34,18 @@ pub(crate) fn compare_jets(
     queries: &[Point],
     rng: &mut ChaCha8Rng,
 ) {
+    let normals = if rng.random_bool(0.5) {
+        NormalData::Slopes
+    } else {
+        NormalData::Ignore
+    };
+    // Production with the defaults (as the command: `mls_cli::evaluate::jet_config`), the
+    // witness with the documented values.
     let config = JetConfig {
-        normals: if rng.random_bool(0.5) {
-            NormalData::Slopes
-        } else {
-            NormalData::Ignore
-        },
+        normals,
         ..JetConfig::default()
     };
+    let documented = mls_ad::documented::jet_config(normals);
     let samples = samples_of(&patch.points, &patch.normals);
     // The CLI's path: the stream in chunks of a random size, then against the witness.
     let results = streamed(
@@ -59,7 +63,7 @@ pub(crate) fn compare_jets(
     };
     let compared = Compared {
         setting,
-        config: &config,
+        config: &documented,
         samples: &samples,
         h: patch.h,
         kinds: Vec::new(),
@@ -160,9 +164,10 @@ fn compare_noisy_heights(tally: &mut Tally, seed: u64, rng: &mut ChaCha8Rng) {
         |par| surface.jet_at_points(&queries, &config, par),
     );
     let samples = samples_of(&points, &normals);
+    let documented = mls_ad::documented::jet_config(NormalData::Ignore);
     let compared = Compared {
         setting,
-        config: &config,
+        config: &documented,
         samples: &samples,
         h,
         kinds,
@@ -269,6 +274,7 @@ fn noisy_patch<S: ParametricSurface>(
 struct Compared<'a> {
     /// The cloud and normal data, for the report's count of chosen degrees.
     setting: &'static str,
+    /// The witness's configuration: the documented defaults (`mls_ad::documented`).
     config: &'a JetConfig,
     samples: &'a [Sample],
     h: f64,

@@ -139,14 +139,19 @@ pub(crate) fn one_case(seed: u64, queries: usize) -> Tally {
         normals.push(normal);
         offsets.push(offset);
     }
-    let radius = surface.kernel().support_radius();
+    // The witness's support and fewest neighbours as documented (`mls_ad::documented`), not
+    // taken from the surface: a changed default must fail here.
+    let radius = match cutoff {
+        Cutoff::None => None,
+        _ => Some(mls_ad::documented::CUTOFF * patch.h),
+    };
     let ctx = Ctx {
         seed,
         h: patch.h,
         a,
         samples: &samples,
         radius,
-        min_neighbours: config.min_neighbours,
+        min_neighbours: mls_ad::documented::MIN_NEIGHBOURS,
     };
 
     // The CLI's path: the stream, in chunks of a random size, against the witness.
@@ -162,6 +167,28 @@ pub(crate) fn one_case(seed: u64, queries: usize) -> Tally {
     for (x, r) in points.iter().zip(&results) {
         ctx.check_point(&mut tally, x, r);
     }
+
+    // Queries spread wider than the support, one at a time through the per-query evaluator
+    // (`Evaluator::curvature_at`, whose support `SampleIndex::samples_within` gathers; the
+    // clustered streams above gather theirs in storage order and never reach it): samples
+    // anywhere in the patch (up to 6.5h from its centre, sparse near its rim), moved up to
+    // ±2h along a random direction.
+    let mut evaluator = surface.evaluator();
+    for _ in 0..SCATTERED_QUERIES {
+        let p = patch.points[rng.random_range(0..patch.points.len())];
+        let d = Vector::new(
+            rng.random_range(-1.0..1.0),
+            rng.random_range(-1.0..1.0),
+            rng.random_range(-1.0..1.0),
+        );
+        let x = p + d * (2.0 * patch.h * rng.random_range(0.0..1.0) / d.norm().max(1e-3));
+        let r = evaluator.curvature_at(&x);
+        ctx.check_per_query(&mut tally, &x, &r);
+    }
+    tally.entry(
+        "`Evaluator::curvature_at`, scattered queries".into(),
+        SCATTERED_QUERIES,
+    );
 
     // The projection from the queries within h/2 of the surface (about h off it lie the
     // spurious sheets of energy maxima, beyond which a failed projection is right).
@@ -289,15 +316,22 @@ fn check_spacing(tally: &mut Tally, seed: u64, patch: &cases::Patch, rng: &mut C
         let copy = points[rng.random_range(0..points.len())];
         points.push(copy);
     }
-    let k = if rng.random_bool(0.5) {
-        DEFAULT_SPACING_NEIGHBOURS
+    // The defaults (the CLI's) on production's side, their documented values on the
+    // witness's.
+    let (k, witness_k) = if rng.random_bool(0.5) {
+        (
+            DEFAULT_SPACING_NEIGHBOURS,
+            mls_ad::documented::SPACING_NEIGHBOURS,
+        )
     } else {
-        rng.random_range(1..=24)
+        let k = rng.random_range(1..=24);
+        (k, k)
     };
-    let factor = if rng.random_bool(0.5) {
-        DEFAULT_H_FACTOR
+    let (factor, witness_factor) = if rng.random_bool(0.5) {
+        (DEFAULT_H_FACTOR, mls_ad::documented::H_FACTOR)
     } else {
-        rng.random_range(0.5..4.0)
+        let f = rng.random_range(0.5..4.0);
+        (f, f)
     };
     let variant = Variant::random(rng);
     let production = variant.run(|par| {
@@ -305,7 +339,7 @@ fn check_spacing(tally: &mut Tally, seed: u64, patch: &cases::Patch, rng: &mut C
             .and_then(|stats| Ok((stats, suggest_h(&stats, factor)?)))
     });
     tally.entry(variant.name("spacing_statistics"), 1);
-    let witness = mls_ad::spacing_witness(&points, k, factor);
+    let witness = mls_ad::spacing_witness(&points, witness_k, witness_factor);
     let value = match (production, witness) {
         (Ok((stats, h)), Some(w)) if (stats.k, stats.distinct) == (w.k, w.distinct) => {
             (h - w.h).abs() / w.h
@@ -315,6 +349,9 @@ fn check_spacing(tally: &mut Tally, seed: u64, patch: &cases::Patch, rng: &mut C
     };
     tally.record(Q::SpacingH, value, seed);
 }
+
+/// Queries per case spread wider than the support, through `Evaluator::curvature_at`.
+const SCATTERED_QUERIES: usize = 6;
 
 /// What every check of one case needs.
 struct Ctx<'a> {
@@ -344,6 +381,35 @@ impl Ctx<'_> {
             }
             _ => tally.record(Q::Status, 1.0, self.seed),
         }
+    }
+
+    /// A result of the per-query evaluator at `x` against the witness: n, g, k1 and k2 as in
+    /// their rows, the largest of them recorded in the per-query row, or 1 where the status
+    /// differs from the witness's verdict.
+    fn check_per_query(&self, tally: &mut Tally, x: &Point, r: &mls_core::PointResult) {
+        let support = mls_ad::support(&x.coords, self.samples, self.radius);
+        let verdict = mls_ad::classify(&x.coords, &support, self.a, self.min_neighbours);
+        let value = match (r, verdict) {
+            (Ok(closed), Ok(w)) => {
+                let imp = &closed.implicit;
+                let rescale = (w.log_scale - imp.log_scale).exp();
+                let gnorm = w.gradient.norm();
+                let kappa = w.hessian.norm() / gnorm;
+                let wc = mls_ad::witness_curvature(&w.gradient, &w.hessian);
+                let c = &closed.curvature;
+                [
+                    (imp.field.normal - w.normal).norm(),
+                    (imp.value * rescale - w.value).abs() / (gnorm * self.h),
+                    (c.k1 - wc.k1).abs() / kappa,
+                    (c.k2 - wc.k2).abs() / kappa,
+                ]
+                .into_iter()
+                .fold(0.0, f64::max)
+            }
+            (Err(s), Err(ws)) if *s == ws => 0.0,
+            _ => 1.0,
+        };
+        tally.record(Q::PerQuery, value, self.seed);
     }
 
     /// A projected point: e′(0) vanishes along n there and e″(0) is not negative; the
@@ -446,7 +512,7 @@ fn check_normals(tally: &mut Tally, seed: u64, patch: &cases::Patch, rng: &mut C
         let w = mls_ad::normal_witness(
             i,
             &patch.points,
-            config.k,
+            mls_ad::documented::NORMAL_NEIGHBOURS,
             patch.h,
             DEFAULT_DEGENERACY_TOLERANCE,
         );

@@ -39,16 +39,16 @@ use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
 
 use crate::jet::{JetWitness, determined, exponents, foot_curvature};
 
-/// mls-core's documented defaults, restated: the first degree-2 support in h
-/// (`QUADRATIC_RADIUS`), the number of supports (`QUADRATIC_SCALES`), the most samples the
-/// largest may hold (`QUADRATIC_MAX_SAMPLES`), and the rounds of the circles' correction.
-const RADIUS: f64 = 3.0;
-const SCALES: usize = 4;
-const MAX_SAMPLES: usize = 2048;
+// mls-core's documented defaults, restated once in [`crate::documented`]: the first
+// degree-2 support in h, the number of supports, the most samples the largest may hold, and
+// Tukey's biweight cutoff in robust standard deviations; and the rounds of the circles'
+// correction and the factor of the median absolute residual that estimates one robust
+// standard deviation under Gaussian noise.
+use crate::documented::{
+    BIWEIGHT_CUTOFF as CUTOFF, QUADRATIC_MAX_SAMPLES as MAX_SAMPLES, QUADRATIC_RADIUS as RADIUS,
+    QUADRATIC_SCALES as SCALES,
+};
 const CIRCLE_ROUNDS: usize = 3;
-/// Tukey's biweight cutoff in robust standard deviations (`BIWEIGHT_CUTOFF`), and the factor of
-/// the median absolute residual that estimates one under Gaussian noise.
-const CUTOFF: f64 = 4.685;
 const MAD_SCALE: f64 = 1.4826;
 
 type Frame = (Vector3<f64>, Vector3<f64>, Vector3<f64>);

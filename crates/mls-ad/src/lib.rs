@@ -8,10 +8,12 @@
 //! dual-number code lives here and nowhere else.
 
 mod adaptive;
+pub mod documented;
 mod jet;
 mod jet_quadratic;
 mod line;
 mod normals;
+mod orientation;
 mod spacing;
 mod support;
 
@@ -22,6 +24,7 @@ use mls_core::Sample;
 use nalgebra::{Matrix3, SVector, SymmetricEigen, Vector3};
 pub use normals::{NormalWitness, jacobi, normal_witness};
 use num_dual::{DualNum, gradient, hessian};
+pub use orientation::{PairCount, pair_agreement};
 pub use spacing::{SpacingWitness, grid_rms_by_shells, spacing_witness};
 pub use support::{COHERENCE_FLOOR, GRADIENT_FLOOR, classify, classify_g, support, weight_sum};
 

@@ -473,6 +473,9 @@ pub fn normals(a: NormalsArgs) -> Result<()> {
                 &name,
             )
         })?;
+        if let Some(w) = est.warning.clone() {
+            pipeline::print_warning(w);
+        }
         let (nrm, status) = evaluate::normals_columns(&est.normals);
         pipeline::check_any_ok(
             &status,

@@ -242,7 +242,7 @@ pub(crate) fn normals<'py>(
                     scale,
                     normals_source: est.source,
                     timings: t,
-                    warnings: Vec::new(),
+                    warnings: est.warning.into_iter().collect(),
                 };
                 Ok((evaluate::normals_columns(&est.normals), summary))
             })

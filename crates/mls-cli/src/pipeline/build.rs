@@ -184,6 +184,7 @@ pub fn build_surface<S>(
         normals,
         source,
         from_file,
+        warning,
     } = t.time("normals", || {
         normals(
             file_normals,
@@ -197,6 +198,9 @@ pub fn build_surface<S>(
             file,
         )
     })?;
+    if let Some(w) = warning {
+        warn(w);
+    }
     if from_file {
         let check = t.time("normals", || {
             check_file_normals(&cloud, |i| normals[i], file)

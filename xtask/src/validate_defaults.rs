@@ -1,0 +1,225 @@
+//! The "documented defaults" row of `cargo xtask validate`: every default and threshold that
+//! a witness restates (`mls_ad::documented`, from README.md and `docs/`) against the value in
+//! mls-core that the command runs with. The witnesses run with the restated values and
+//! production with its own, so a changed default also moves the rows that depend on it; this
+//! row names the field and both values.
+
+use mls_ad::documented as doc;
+use mls_core::adaptive::AdaptiveConfig;
+use mls_core::normals::{
+    DEFAULT_H_FACTOR, DEFAULT_NEIGHBOURS, DEFAULT_SPACING_NEIGHBOURS, NormalsConfig, Orientation,
+};
+use mls_core::{Cutoff, JetConfig, MlsConfig, NormalData};
+
+use crate::validate::{Q, Tally};
+
+/// One default: where it lives in mls-core, its value there and as documented, and where it
+/// is documented.
+pub(crate) struct Documented {
+    pub field: &'static str,
+    pub production: String,
+    pub documented: String,
+    pub source: &'static str,
+}
+
+impl Documented {
+    pub fn agrees(&self) -> bool {
+        self.production == self.documented
+    }
+}
+
+fn field(
+    field: &'static str,
+    production: impl std::fmt::Debug,
+    documented: impl std::fmt::Debug,
+    source: &'static str,
+) -> Documented {
+    Documented {
+        field,
+        production: format!("{production:?}"),
+        documented: format!("{documented:?}"),
+        source,
+    }
+}
+
+fn radius(c: Cutoff) -> Option<f64> {
+    match c {
+        Cutoff::Radius(r) => Some(r),
+        Cutoff::None => None,
+    }
+}
+
+/// Every default a witness restates, with mls-core's value and the documented one.
+pub(crate) fn defaults() -> Vec<Documented> {
+    let jet = JetConfig::default();
+    let normals = NormalsConfig::default();
+    let mls = MlsConfig::new(1.0);
+    let adaptive = AdaptiveConfig::new(1.0);
+    const DERIVATION_SCALE: &str = "docs/derivation.md, the jet's \"Scale\"";
+    const DERIVATION_QUADRATIC: &str = "docs/derivation.md, the jet's \"Degree (heights only)\"";
+    vec![
+        field(
+            "JetConfig::default().degree",
+            jet.degree,
+            doc::JET_DEGREE,
+            "README.md (methods), docs/derivation.md \"Fit\"",
+        ),
+        field(
+            "JetConfig::default().radius",
+            jet.radius,
+            doc::JET_RADIUS,
+            DERIVATION_SCALE,
+        ),
+        field(
+            "JetConfig::default().scales",
+            jet.scales,
+            doc::JET_SCALES,
+            DERIVATION_SCALE,
+        ),
+        field(
+            "JetConfig::default().lead",
+            jet.lead,
+            doc::JET_LEAD,
+            "docs/derivation.md, \"Lead scale (file normals)\"",
+        ),
+        field(
+            "JetConfig::default().confidence",
+            jet.confidence,
+            doc::JET_CONFIDENCE,
+            DERIVATION_SCALE,
+        ),
+        field(
+            "JetConfig::default().normals",
+            jet.normals == NormalData::Slopes,
+            doc::JET_NORMALS == NormalData::Slopes,
+            "docs/derivation.md \"Fit\", README.md --normals (file normals as slopes)",
+        ),
+        field(
+            "JetConfig::default().quadratic",
+            jet.quadratic,
+            doc::JET_QUADRATIC,
+            DERIVATION_QUADRATIC,
+        ),
+        field(
+            "jet::QUADRATIC_RADIUS",
+            mls_core::jet::QUADRATIC_RADIUS,
+            doc::QUADRATIC_RADIUS,
+            DERIVATION_QUADRATIC,
+        ),
+        field(
+            "jet::QUADRATIC_SCALES",
+            mls_core::jet::QUADRATIC_SCALES,
+            doc::QUADRATIC_SCALES,
+            DERIVATION_QUADRATIC,
+        ),
+        field(
+            "jet::QUADRATIC_MAX_SAMPLES",
+            mls_core::jet::QUADRATIC_MAX_SAMPLES,
+            doc::QUADRATIC_MAX_SAMPLES,
+            DERIVATION_QUADRATIC,
+        ),
+        field(
+            "jet::BIWEIGHT_CUTOFF",
+            mls_core::jet::BIWEIGHT_CUTOFF,
+            doc::BIWEIGHT_CUTOFF,
+            "README.md, status code 8",
+        ),
+        field(
+            "normals::DEFAULT_H_FACTOR",
+            DEFAULT_H_FACTOR,
+            doc::H_FACTOR,
+            "README.md --h-factor, docs/defaults.md",
+        ),
+        field(
+            "normals::DEFAULT_SPACING_NEIGHBOURS",
+            DEFAULT_SPACING_NEIGHBOURS,
+            doc::SPACING_NEIGHBOURS,
+            "README.md --h-factor, \"Scan lines far apart\"",
+        ),
+        field(
+            "normals::DEFAULT_NEIGHBOURS",
+            DEFAULT_NEIGHBOURS,
+            doc::NORMAL_NEIGHBOURS,
+            "README.md, \"Scan lines far apart\"",
+        ),
+        field(
+            "NormalsConfig::default().k",
+            normals.k,
+            doc::NORMAL_NEIGHBOURS,
+            "README.md, \"Scan lines far apart\"",
+        ),
+        field(
+            "NormalsConfig::default().orientation is outward",
+            normals.orientation == Orientation::Outward,
+            true,
+            "README.md --orient (mst: outward)",
+        ),
+        field(
+            "Cutoff::DEFAULT",
+            radius(Cutoff::DEFAULT),
+            Some(doc::CUTOFF),
+            "README.md --cutoff",
+        ),
+        field(
+            "MlsConfig::new(h).cutoff",
+            radius(mls.cutoff),
+            Some(doc::CUTOFF),
+            "README.md --cutoff",
+        ),
+        field(
+            "MlsConfig::new(h).min_neighbours",
+            mls.min_neighbours,
+            doc::MIN_NEIGHBOURS,
+            "README.md, status code 2",
+        ),
+        field(
+            "AdaptiveConfig::new(h).scales",
+            adaptive.scales,
+            doc::ADAPTIVE_SCALES,
+            "README.md --adaptive (h up to 4×)",
+        ),
+        field(
+            "AdaptiveConfig::new(h).confidence",
+            adaptive.confidence,
+            doc::ADAPTIVE_CONFIDENCE,
+            "docs/derivation.md, \"Shrinkage, and the adaptive scale\"",
+        ),
+        field(
+            "AdaptiveConfig::new(h).min_h_factor",
+            adaptive.min_h_factor,
+            doc::ADAPTIVE_MIN_H_FACTOR,
+            "AdaptiveConfig::new's documentation",
+        ),
+        field(
+            "AdaptiveConfig::new(h).surface.cutoff",
+            radius(adaptive.surface.cutoff),
+            Some(doc::CUTOFF),
+            "README.md --cutoff",
+        ),
+    ]
+}
+
+/// Records the row (1 per default that differs from its documented value) and returns the
+/// report's table and a failure message per difference.
+pub(crate) fn check(tally: &mut Tally) -> (String, Vec<String>) {
+    let mut table = String::from(
+        "\nDocumented defaults (the witnesses' values, `mls_ad::documented`) against mls-core's:\n\n\
+         | default | mls-core | documented | documented in |\n| --- | --- | --- | --- |\n",
+    );
+    let mut failures = Vec::new();
+    for d in defaults() {
+        tally.record(Q::Defaults, f64::from(!d.agrees()), 0);
+        table.push_str(&format!(
+            "| `{}` | {} | {} | {} |\n",
+            d.field, d.production, d.documented, d.source
+        ));
+        if !d.agrees() {
+            failures.push(format!(
+                "documented defaults: {} is {} in mls-core but {} as documented in {} \
+                 (change the document and mls_ad::documented with it)",
+                d.field, d.production, d.documented, d.source
+            ));
+        }
+    }
+    (table, failures)
+}
