@@ -98,8 +98,9 @@ enum Task {
     /// reader: every curvature field by name with our values; skips a program not
     /// installed; writes target/clients/.
     Clients,
-    /// What CI runs (.ci/run calls it): fmt --check, clippy -D warnings, the tests, validate
-    /// --quick, paper --quick, the Python package's tests and clients.
+    /// What CI runs (.ci/run calls it): fmt --check, clippy -D warnings, rustdoc -D
+    /// warnings, the tests, validate --quick, paper --quick, the Python package's tests and
+    /// clients.
     Ci,
 }
 
@@ -183,6 +184,19 @@ fn ci() -> Result<()> {
         "-D",
         "warnings",
     ]))?;
+    // The API docs' links (a link to a private or renamed item is an error).
+    run_checked(
+        cargo()
+            .args([
+                "doc",
+                "--workspace",
+                "--no-deps",
+                "--locked",
+                "--exclude",
+                "mls-py",
+            ])
+            .env("RUSTDOCFLAGS", "-D warnings"),
+    )?;
     // The README's test command.
     run_checked(cargo().args(["test", "--workspace", "--locked"]))?;
     // Closed form against hyper-dual AD, and the analytic shapes.

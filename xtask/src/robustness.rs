@@ -39,7 +39,7 @@ const MAX_PROJECTED: usize = 120;
 /// `|gauss|·h²` above this fails. Measured worst over 10⁴ clouds: see `docs/robustness.md`.
 pub(crate) const FLAT_TOLERANCE: f64 = 1e-9;
 /// A cloud translated by 10⁶ reproduces its base (relative differences, see
-/// [`check_match`]) at the points and after projection. The translation rounds each
+/// `check_match`) at the points and after projection. The translation rounds each
 /// coordinate to a multiple of up to 2⁻³² ≈ 2.3e-10, up to 2e-9 h for the h of these clouds;
 /// measured worst over 10⁴ clouds 3.5e-7 at the points, 4.8e-8 after projection.
 pub(crate) const OFFSET_TOLERANCE: [f64; 2] = [1e-5, 1e-5];

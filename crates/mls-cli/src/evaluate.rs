@@ -74,7 +74,7 @@ pub struct CurvatureColumns {
 }
 
 impl CurvatureColumns {
-    /// Columns of `n` rows, NaN until [`Self::set`] (the streams set every row once).
+    /// Columns of `n` rows, NaN until `Self::set` (the streams set every row once).
     pub fn new(n: usize, options: &CurvatureOptions) -> Self {
         let adaptive = options.adaptive;
         let jet = options.method == Method::Jet;

@@ -74,7 +74,7 @@ impl Implicit {
 }
 
 /// Reusable per-thread storage so that evaluation does not allocate: the loaded samples in
-/// blocks of [`LANES`], computed once for both passes.
+/// blocks of `LANES`, computed once for both passes.
 #[derive(Clone, Debug, Default)]
 pub struct FieldScratch {
     blocks: Vec<Block>,

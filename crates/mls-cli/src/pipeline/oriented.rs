@@ -47,7 +47,7 @@ const MIN_FILE_CONSISTENCY: f64 = 0.99;
 const MIN_ESTIMATED_CONSISTENCY: f64 = 0.99;
 
 /// The warning for estimated normals whose oriented neighbour pairs agree in sign at the share
-/// `agree` only, if it is below [`MIN_ESTIMATED_CONSISTENCY`]. The run goes on: the normals are
+/// `agree` only, if it is below `MIN_ESTIMATED_CONSISTENCY`. The run goes on: the normals are
 /// the best the rule found, and the summary says how far they agree.
 pub fn estimated_normals_warning(agree: f64, file: &str) -> Option<String> {
     (agree < MIN_ESTIMATED_CONSISTENCY).then(|| {

@@ -40,7 +40,7 @@ pub fn signs_agree(mine: u8, theirs: u8) -> Option<bool> {
 pub struct TileResult {
     /// The curvature columns of the tile's own points, in their order.
     pub columns: CurvatureColumns,
-    /// The sign code of every loaded point's estimated normal (see [`sign_code`]), for the
+    /// The sign code of every loaded point's estimated normal (see `sign_code`), for the
     /// overlap check.
     pub codes: Vec<u8>,
     /// Where the normals came from, for the summary.

@@ -286,7 +286,7 @@ impl Sensitivity {
 }
 
 /// A heights-only fit of degree 2 at `radius` to the heights less its own circles' quartic
-/// part ([`circle_term`], refitted [`CIRCLE_ROUNDS`] times), with its sensitivity to the
+/// part (`circle_term`, refitted `CIRCLE_ROUNDS` times), with its sensitivity to the
 /// terms it omits; `None` where the support does not determine degree 2.
 pub fn quadratic(
     samples: &[Sample],

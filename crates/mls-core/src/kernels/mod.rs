@@ -2,12 +2,12 @@
 //! compiled once per instruction set, with the dispatch between them and the branch-free exp
 //! they use. They are the only code whose cost grows with the number of samples; `field` and
 //! `projection` hold the maths around them (docs/derivation.md) and call them through
-//! [`Kernels`]; the jet's fit lives in `jet/fit.rs`, inlined here.
+//! `Kernels`; the jet's fit lives in `jet/fit.rs`, inlined here.
 //!
 //! Layout (after kiddo's `float_leaf_simd/`): `field.rs` the loops over the field's sample
 //! blocks, `line.rs` the line search's, `exp.rs` the exp; here the lane count, the
-//! [`Kernels`] trait implemented for [`Portable`] and [`Avx2`] from one list of loops, and
-//! [`Isa`], which picks one at run time. (A third copy for AVX-512VL, the same four lanes and
+//! `Kernels` trait implemented for `Portable` and `Avx2` from one list of loops, and
+//! `Isa`, which picks one at run time. (A third copy for AVX-512VL, the same four lanes and
 //! bits with 32 registers instead of 16, was measured slower: CPU 1.08× on the paper's
 //! curvature of the 1M sphere and 1.03× on the jet, whole-process A/B pairs, 2026-12-07.)
 
@@ -174,7 +174,7 @@ pub fn set_portable_kernels(portable: bool) {
     FORCE_PORTABLE.set(portable);
 }
 
-/// The instruction set the per-sample loops of [`evaluate`] run with on this CPU: `"avx2"`, or
+/// The instruction set the per-sample loops of `evaluate` run with on this CPU: `"avx2"`, or
 /// `"baseline"` (the compilation target's own features: SSE2 on x86-64). Results are the same
 /// bits with either; only the speed differs.
 pub fn kernel_isa() -> &'static str {

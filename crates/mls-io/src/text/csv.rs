@@ -22,7 +22,7 @@ use crate::{CloudBuilder, PointCloud, ReadOutcome, SLOT_NAMES};
 /// `nz` are optional (all three or none) and any other column is an attribute under its
 /// header name (case kept; each character other than an ASCII letter, digit, `_`, `-` or `.`
 /// replaced by `_`, `_2`, `_3` … appended to a repeated name, `colN` for an empty name in
-/// column `N`), typed as in [`read_xyz_with`]. Every row must have
+/// column `N`), typed as in [`read_xyz_with`](super::read_xyz_with). Every row must have
 /// as many fields as the header. Fields may be double-quoted (with `""` for a quote inside),
 /// so text columns containing commas are skipped correctly; a quoted field may not span lines.
 /// Blank lines are ignored. A header without rows gives an empty cloud. `name` is the display

@@ -13,7 +13,7 @@ use crate::normals::{NeighbourGraph, NormalsError};
 use crate::surface::Parallelism;
 
 /// The fraction of graph edges whose normals agree in sign, `n_i · n_j > 0`, among the edges
-/// that can tell ([`sign_agreement`]).
+/// that can tell (`sign_agreement`).
 ///
 /// Edges are those of the symmetrised graph, each pair counted once, and only between points
 /// whose normals are finite and non-zero (a zero normal marks a missing one). A consistently
@@ -70,7 +70,7 @@ pub(crate) fn sign_agreement(chord: &Vector, ni: &Vector, nj: &Vector) -> Option
 /// [`orientation_consistency`] estimated without building the whole graph: over at most
 /// `max_points` points spread evenly over `cloud`'s storage order (a Morton order, so they
 /// cover the whole cloud), each against its `k` nearest neighbours, pairs counted from the
-/// sampled side, among the pairs that can tell ([`sign_agreement`]). `normal(i)` is the
+/// sampled side, among the pairs that can tell (`sign_agreement`). `normal(i)` is the
 /// normal of input point `i`, `None` where it has none. For
 /// checking normals read from a file at a small fraction of the graph's cost: 20,000 points
 /// give the fraction to about ±0.1 % near 99 %. `None` when no pair has two normals.
