@@ -170,7 +170,8 @@ pub(crate) fn run_jet(
 }
 
 /// [`run_jet`]; with `JET_DIAG` set, also the chosen degrees and supports, the 12 worst
-/// points and the make-up of the predicted error by decile (against `truth`).
+/// points, the make-up of the predicted error by decile (against `truth`) and the unscored
+/// points (NaN truth: outliers) that kept a value.
 pub(crate) fn run_jet_diag(
     points: &[Point],
     normals: &[Vector],
@@ -241,6 +242,21 @@ pub(crate) fn run_jet_diag(
                     m(&|r| r.2).sqrt(),
                     m(&|r| r.3)
                 );
+            }
+            // The unscored points (outliers) that kept a value, and the fit that gave it.
+            for (i, (r, t)) in r.iter().zip(truth).enumerate() {
+                if let (Ok(p), false) = (r, t[0].is_finite()) {
+                    eprintln!(
+                        "unscored {i}: deg {} ρ/h {:.2} a00/h {:.3} noise/h {:.4} k1 {:.3} sd {:.4} n·z {:.2}",
+                        p.fit.degree,
+                        p.fit.radius / h,
+                        p.fit.coefficients[0] / h,
+                        p.fit.noise / h,
+                        p.curvature.k1,
+                        p.sd[0],
+                        normals[i].z
+                    );
+                }
             }
         }
     }
@@ -413,26 +429,6 @@ pub(crate) fn explore(only: Option<&String>, with_peers: bool, write: bool) -> R
             ..JetConfig::default()
         };
         let run = run_jet_diag(&cloud.points, &normals, h, &default, Some(&cloud.truth))?;
-        if std::env::var_os("JET_DIAG").is_some() {
-            let s =
-                mls_core::MlsSurface::new(&cloud.points, &normals, mls_core::MlsConfig::new(h))?;
-            let r = s.jet_at_points(&cloud.points, &default, Parallelism::Rayon);
-            for (&i, t) in noisy.outliers.iter().zip(&noisy.outlier_truth) {
-                if let Ok(p) = &r[i] {
-                    eprintln!(
-                        "outlier {i}: deg {} ρ/h {:.2} a00/h {:.3} noise/h {:.4} k1 {:.3} t {:.3} sd {:.4} n·z {:.2}",
-                        p.fit.degree,
-                        p.fit.radius / h,
-                        p.fit.coefficients[0] / h,
-                        p.fit.noise / h,
-                        p.curvature.k1,
-                        t[0],
-                        p.sd[0],
-                        normals[i].z
-                    );
-                }
-            }
-        }
         let extra = outlier_report(noisy, &run);
         let mut r = row("jet (default)".into(), cloud, &run);
         r.method += &extra;

@@ -14,6 +14,17 @@ REPO = Path(__file__).resolve().parents[3]
 BUNNY = REPO / "tests" / "data" / "bunny-stanford.ply"
 
 
+def readme_example(after: str) -> tuple[str, str]:
+    """The first ```python block of README.md after the text `after`, and the ```text block
+    after it (what the README shows the example printing)."""
+    readme = (REPO / "README.md").read_text(encoding="utf-8")
+    section = readme[readme.index(after) :]
+    start = section.index("```python\n") + len("```python\n")
+    end = section.index("```", start)
+    shown_at = section.index("```text\n", end) + len("```text\n")
+    return section[start:end], section[shown_at : section.index("```", shown_at)]
+
+
 def _target_dir() -> Path:
     try:
         meta = subprocess.run(

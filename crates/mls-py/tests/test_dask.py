@@ -340,15 +340,9 @@ def test_readme_example_runs_as_written(tmp_path):
     directory of its own, where it writes its survey tiles and their outputs): its worker
     processes import it, which the `__main__` guard allows. It prints what the README shows
     after it, and writes the files it names."""
-    from conftest import REPO
+    from conftest import readme_example
 
-    readme = (REPO / "README.md").read_text(encoding="utf-8")
-    section = readme[readme.index("### Python: Dask") :]
-    start = section.index("```python\n") + len("```python\n")
-    end = section.index("```", start)
-    code = section[start:end]
-    shown_at = section.index("```text\n", end) + len("```text\n")
-    shown = section[shown_at : section.index("```", shown_at)]
+    code, shown = readme_example("### Python: Dask")
     script = tmp_path / "example.py"
     script.write_text(code, encoding="utf-8")
     done = subprocess.run(

@@ -2,9 +2,11 @@
 
 import doctest
 import os
+import subprocess
+import sys
 
 import mlscurv
-from conftest import REPO
+from conftest import REPO, readme_example
 
 
 def test_docstring_examples(monkeypatch):
@@ -39,16 +41,7 @@ def test_readme_python_example_runs_as_written(tmp_path):
     """The README's first Python example, taken verbatim from README.md and run as a script
     where the bundled scan is at the path it names: it prints what the README shows after it
     and writes the command's output file, byte for byte."""
-    import subprocess
-    import sys
-
-    readme = (REPO / "README.md").read_text(encoding="utf-8")
-    section = readme[readme.index("pip install ./crates/mls-py") :]
-    start = section.index("```python\n") + len("```python\n")
-    end = section.index("```", start)
-    code = section[start:end]
-    shown_at = section.index("```text\n", end) + len("```text\n")
-    shown = section[shown_at : section.index("```", shown_at)]
+    code, shown = readme_example("pip install ./crates/mls-py")
     (tmp_path / "tests").symlink_to(REPO / "tests")
     script = tmp_path / "example.py"
     script.write_text(code, encoding="utf-8")

@@ -364,6 +364,25 @@ fn gaussian(rng: &mut ChaCha8Rng) -> f64 {
     (-2.0 * (1.0 - a).ln()).sqrt() * (std::f64::consts::TAU * b).cos()
 }
 
+/// Asserts that the jet at `x` chose the witness's degree and radius and has its k1 and k2
+/// within 1e-9 of max |k|; returns the larger relative difference.
+fn same_choice_and_k(x: &Point, j: &mls_core::JetPoint, w: &mls_ad::JetWitness) -> f64 {
+    assert_eq!(
+        (j.fit.degree, j.fit.radius),
+        (w.degree, w.radius),
+        "at {x:?}: degree and radius"
+    );
+    let kappa = w.k1.abs().max(w.k2.abs());
+    [(j.curvature.k1, w.k1), (j.curvature.k2, w.k2)]
+        .into_iter()
+        .map(|(got, want)| {
+            let e = (got - want).abs() / kappa;
+            assert!(e <= 1e-9, "at {x:?}: {got} against {want}");
+            e
+        })
+        .fold(0.0, f64::max)
+}
+
 /// Heights only on a noisy sphere patch (radius 1, 2000 points on a cap of 0.5 rad, Gaussian
 /// position noise of 0.2 spacings per coordinate, exact normals as the frame only): the
 /// degree-2 candidates (`JetConfig::quadratic`, on supports of 3h to 8.5h with the leak of the
@@ -412,18 +431,8 @@ fn degree_two_candidates_match_their_witness_on_a_noisy_sphere() {
     for (x, r) in queries.iter().zip(results) {
         let j = r.unwrap();
         let w = mls_ad::jet_witness(&x.coords, &samples, h, &config).unwrap();
-        assert_eq!(
-            (j.fit.degree, j.fit.radius),
-            (w.degree, w.radius),
-            "at {x:?}: degree and radius"
-        );
+        worst_k = worst_k.max(same_choice_and_k(x, &j, &w));
         quadratic += usize::from(w.degree == 2);
-        let kappa = w.k1.abs().max(w.k2.abs());
-        for (got, want) in [(j.curvature.k1, w.k1), (j.curvature.k2, w.k2)] {
-            let e = (got - want).abs() / kappa;
-            worst_k = worst_k.max(e);
-            assert!(e <= 1e-9, "at {x:?}: {got} against {want}");
-        }
         let pe = j.predicted_error();
         let we = [0, 1].map(|i| w.sd[i].hypot(w.bias[i]));
         let e = (pe[0] - we[0]).abs().max((pe[1] - we[1]).abs()) / we[0].max(we[1]);
@@ -514,18 +523,8 @@ fn outliers_and_robust_weights_match_their_witness_on_a_noisy_sphere() {
             }
             (r, w) => panic!("at {x:?} (query {i}): {r:?} against {w:?}"),
         };
-        assert_eq!(
-            (j.fit.degree, j.fit.radius),
-            (w.degree, w.radius),
-            "at {x:?}: degree and radius"
-        );
+        worst_k = worst_k.max(same_choice_and_k(x, &j, &w));
         quadratic += usize::from(w.degree == 2);
-        let kappa = w.k1.abs().max(w.k2.abs());
-        for (got, want) in [(j.curvature.k1, w.k1), (j.curvature.k2, w.k2)] {
-            let e = (got - want).abs() / kappa;
-            worst_k = worst_k.max(e);
-            assert!(e <= 1e-9, "at {x:?}: {got} against {want}");
-        }
     }
     eprintln!(
         "{flagged} outliers flagged by both ({stray_flagged} of {} stray queries), degree 2 at \

@@ -137,6 +137,11 @@ impl Climb {
         }
     }
 
+    /// The buffer, back to the caller, where the query ends before any choice.
+    pub fn release(self) -> Vec<JetPoint> {
+        self.ladder
+    }
+
     /// The choice of least estimated squared error among the candidates and `lead` (a fit on
     /// a smaller support, taken only where there are candidates), with that error; a
     /// lower-degree fallback has none (infinite). The buffer goes back to the caller.

@@ -59,7 +59,7 @@ impl Evaluator<'_> {
                 ladder::frame_of_normals(&self.support, &local, radius, &own)
             });
             let Some(frame) = frame else {
-                self.ladder = climb.choose(None).0;
+                self.ladder = climb.release();
                 return Err(PointStatus::NormalUndefined);
             };
             // The ladder's first fit weighs the slopes in two rounds; the scales after it take
