@@ -57,6 +57,7 @@ pub(crate) fn defaults() -> Vec<Documented> {
     let adaptive = AdaptiveConfig::new(1.0);
     const DERIVATION_SCALE: &str = "docs/derivation.md, the jet's \"Scale\"";
     const DERIVATION_QUADRATIC: &str = "docs/derivation.md, the jet's \"Degree (heights only)\"";
+    const DERIVATION_SHARE: &str = "docs/derivation.md, the jet's \"Shared supports\"";
     vec![
         field(
             "JetConfig::default().degree",
@@ -117,6 +118,48 @@ pub(crate) fn defaults() -> Vec<Documented> {
             mls_core::jet::QUADRATIC_MAX_SAMPLES,
             doc::QUADRATIC_MAX_SAMPLES,
             DERIVATION_QUADRATIC,
+        ),
+        field(
+            "JetConfig::default().share",
+            jet.share,
+            doc::JET_SHARE,
+            DERIVATION_SHARE,
+        ),
+        field(
+            "jet::ANCHOR_CELL",
+            mls_core::jet::ANCHOR_CELL,
+            doc::SHARE_CELL,
+            DERIVATION_SHARE,
+        ),
+        field(
+            "jet::ANCHOR_REACH",
+            mls_core::jet::ANCHOR_REACH,
+            doc::SHARE_REACH,
+            DERIVATION_SHARE,
+        ),
+        field(
+            "jet::ANCHOR_MIN_COUNT",
+            mls_core::jet::ANCHOR_MIN_COUNT,
+            doc::SHARE_MIN_COUNT,
+            DERIVATION_SHARE,
+        ),
+        field(
+            "jet::ANCHOR_MIN_SUPPORT",
+            mls_core::jet::ANCHOR_MIN_SUPPORT,
+            doc::SHARE_MIN_SUPPORT,
+            DERIVATION_SHARE,
+        ),
+        field(
+            "jet::ANCHOR_MAX_TURN",
+            mls_core::jet::ANCHOR_MAX_TURN,
+            doc::SHARE_MAX_TURN,
+            DERIVATION_SHARE,
+        ),
+        field(
+            "jet::ANCHOR_RESIDUAL",
+            mls_core::jet::ANCHOR_RESIDUAL,
+            doc::SHARE_RESIDUAL,
+            DERIVATION_SHARE,
         ),
         field(
             "jet::BIWEIGHT_CUTOFF",

@@ -292,13 +292,25 @@ impl Compared<'_> {
         queries: &[Point],
         results: Vec<Result<JetPoint, PointStatus>>,
     ) {
+        // Heights only with the degree-2 candidates: a query the anchors share gets their
+        // blend, witnessed by `mls_ad::ShareWitness` from the witness's own anchor jets.
+        let mut share = (self.config.normals == NormalData::Ignore
+            && self.config.quadratic
+            && self.config.share)
+            .then(|| mls_ad::ShareWitness::new(self.samples, self.h, self.config));
         for (i, (x, r)) in queries.iter().zip(results).enumerate() {
             let kind = self
                 .kinds
                 .get(i)
                 .copied()
                 .unwrap_or("sample or surface point");
-            self.record_one(tally, seed, x, r, kind);
+            match share.as_mut().and_then(|s| s.shared(&x.coords)) {
+                Some(w) => {
+                    let chosen = format!("degree 2 blended, ρ = {:.1}h", w.radius / self.h);
+                    self.compare(tally, seed, r, Ok(w), Some(chosen), kind);
+                }
+                None => self.record_one(tally, seed, x, r, kind),
+            }
         }
     }
 
@@ -345,6 +357,19 @@ impl Compared<'_> {
             (d, true) => format!("degree {d}, over degree-2 candidates{query}"),
             (d, false) => format!("degree {d}{query}"),
         });
+        self.compare(tally, seed, r, witness, chosen, kind);
+    }
+
+    /// One production result against its witness; `chosen` names the choice for the report.
+    fn compare(
+        &self,
+        tally: &mut Tally,
+        seed: u64,
+        r: Result<JetPoint, PointStatus>,
+        witness: Result<mls_ad::JetWitness, JetRefusal>,
+        chosen: Option<String>,
+        kind: &'static str,
+    ) {
         let h = self.h;
         match (r, witness) {
             (Ok(j), Ok(w)) => {

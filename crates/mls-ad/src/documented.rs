@@ -30,6 +30,22 @@ pub const JET_CONFIDENCE: f64 = 3.0;
 /// therefore also gets degree-2 candidates" (`docs/derivation.md`, "Degree (heights only)";
 /// README.md's example summary: "or degree 2 on 3h to 8.5h chosen per point").
 pub const JET_QUADRATIC: bool = true;
+/// "a query where the anchors within reach all chose degree 2 on a support at least four
+/// cells wide takes their blend" (`docs/derivation.md`, "Shared supports").
+pub const JET_SHARE: bool = true;
+/// The anchors' grid: "one sample per cell of side 1.5h" (`docs/derivation.md`, "Shared
+/// supports"; so is every `SHARE_` value below).
+pub const SHARE_CELL: f64 = 1.5;
+/// "the anchors within 2 cells (3h) of the query".
+pub const SHARE_REACH: f64 = 2.0;
+/// "at least 3 anchors".
+pub const SHARE_MIN_COUNT: usize = 3;
+/// "a degree-2 fit on a support at least 4 cells (6h) wide".
+pub const SHARE_MIN_SUPPORT: f64 = 4.0;
+/// "each anchor's normal within about 25° of the blend's (cosine 0.9)".
+pub const SHARE_MAX_TURN: f64 = 0.9;
+/// "within 3 σ̂ of the nearest anchor's quadric".
+pub const SHARE_RESIDUAL: f64 = 3.0;
 /// The normal data of `JetConfig::default()`: the samples' normals fitted as slopes, the
 /// role of measured (file) normals (`docs/derivation.md`, "Fit": "when the normals are
 /// measured (file normals, `NormalData::Slopes`)"; README.md, `--normals`: "the jet fits file
@@ -89,5 +105,6 @@ pub fn jet_config(normals: NormalData) -> JetConfig {
         confidence: JET_CONFIDENCE,
         normals,
         quadratic: JET_QUADRATIC,
+        share: JET_SHARE,
     }
 }

@@ -36,6 +36,13 @@ pub struct JetWitness {
     pub foot: Vector3<f64>,
     /// λ of the fit's final round (0 without slopes).
     pub slope_weight: f64,
+    /// The fitted surface's unit normal at the foot point (`∇F/|∇F|`).
+    pub normal: Vector3<f64>,
+    /// Principal directions of k1 and k2 (signs arbitrary).
+    pub directions: [Vector3<f64>; 2],
+    /// σ̂ of the heights, file units, for a degree-2 candidate (NaN for the ladder's fits,
+    /// which no blend takes).
+    pub noise: f64,
 }
 
 /// Whether the weighted design determines its basis. The test is defined on the Cholesky pivots
@@ -258,6 +265,10 @@ fn fitted<D: DualNum<Primitive = f64> + Copy>(
 /// A fit's curvature at its foot point `x + a00 n`.
 pub(crate) struct FootCurvature {
     pub(crate) foot: Vector3<f64>,
+    /// `∇F/|∇F|` at the foot point.
+    pub(crate) normal: Vector3<f64>,
+    /// The principal directions.
+    pub(crate) directions: [Vector3<f64>; 2],
     /// k1, k2 of `F = w − P(u, v)` by hyper-dual differentiation.
     pub(crate) k: [f64; 2],
     /// `g_i = (c², cs, s²)·2/|∇F|`, `(c, s)` principal direction i on `(t1, t2)`: the first
@@ -289,6 +300,8 @@ pub(crate) fn foot_curvature(
     let sd = rows.map(|g| (g.dot(&(cov * g))).max(0.0).sqrt().max(1e-8 / rho));
     FootCurvature {
         foot,
+        normal: grad.normalize(),
+        directions: [wc.d1, wc.d2],
         k: [wc.k1, wc.k2],
         rows,
         sd,
@@ -418,6 +431,9 @@ pub fn jet_candidates(
                 radius: rho,
                 foot: at.foot,
                 slope_weight,
+                normal: at.normal,
+                directions: at.directions,
+                noise: f64::NAN,
             },
             equations,
         )))

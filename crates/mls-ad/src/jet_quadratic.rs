@@ -339,6 +339,9 @@ fn candidate(
             condition: eig.max() / eig.min(),
             foot: at.foot,
             slope_weight: 0.0,
+            normal: at.normal,
+            directions: at.directions,
+            noise: fit.var.sqrt() * rho,
         },
     ))
 }

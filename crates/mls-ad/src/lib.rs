@@ -11,6 +11,7 @@ mod adaptive;
 pub mod documented;
 mod jet;
 mod jet_quadratic;
+mod jet_share;
 mod line;
 mod normals;
 mod orientation;
@@ -19,6 +20,7 @@ mod support;
 
 pub use adaptive::{AdaptiveWitness, Ladder, adaptive_witness};
 pub use jet::{JetRefusal, JetWitness, jet_candidates, jet_witness};
+pub use jet_share::ShareWitness;
 pub use line::{LineWitness, line_witness, stationarity};
 use mls_core::Sample;
 use nalgebra::{Matrix3, SVector, SymmetricEigen, Vector3};

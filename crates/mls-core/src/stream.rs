@@ -138,11 +138,13 @@ impl MlsSurface {
         chunk: usize,
         sink: impl FnMut(&[usize], &[Result<JetPoint, PointStatus>]),
     ) {
+        let anchors = self.anchors(config);
+        let mut cache = crate::surface::AnchorCache::new();
         for_each_chunk(
             queries,
             chunk,
             par,
-            |batch| self.jet_at_points(batch, config, par),
+            |batch| self.jet_at_points_with(batch, config, anchors.as_ref(), &mut cache, par),
             sink,
         );
     }

@@ -20,7 +20,11 @@ use crate::error::ConfigError;
 use crate::field::{Implicit, Sample};
 pub use crate::frame::Frame;
 use crate::frame::morton_key;
-use crate::jet::{JetConfig, JetPoint};
+use crate::jet::anchors::{ANCHOR_CELL, Anchors};
+use crate::jet::{JetConfig, JetPoint, NormalData};
+
+/// The anchors' jets evaluated so far, by anchor.
+pub(crate) type AnchorCache = std::collections::HashMap<u32, Result<JetPoint, PointStatus>>;
 use crate::kernel::{Cutoff, Kernel};
 use crate::math::{Point, UnitNormal, Vector};
 pub use crate::par::Parallelism;
@@ -222,12 +226,113 @@ impl MlsSurface {
         config: &JetConfig,
         par: Parallelism,
     ) -> Vec<Result<JetPoint, PointStatus>> {
-        par.map_init(
+        let anchors = self.anchors(config);
+        self.jet_at_points_with(
+            queries,
+            config,
+            anchors.as_ref(),
+            &mut AnchorCache::new(),
+            par,
+        )
+    }
+
+    /// The anchors of [`crate::jet::anchors`] where `config` shares supports.
+    pub(crate) fn anchors(&self, config: &JetConfig) -> Option<Anchors> {
+        (config.share && config.quadratic && config.normals == NormalData::Ignore).then(|| {
+            Anchors::new(
+                &self.index.samples,
+                &self.index.origin,
+                ANCHOR_CELL * self.kernel.h(),
+            )
+        })
+    }
+
+    /// [`Self::jet_at_points`] with the surface's `anchors` (if it shares supports) and the
+    /// anchors' jets evaluated so far, which the call extends and then prunes to those within
+    /// reach of its queries (a stream's next chunk is mostly their neighbour).
+    pub(crate) fn jet_at_points_with(
+        &self,
+        queries: &[Point],
+        config: &JetConfig,
+        anchors: Option<&Anchors>,
+        cache: &mut AnchorCache,
+        par: Parallelism,
+    ) -> Vec<Result<JetPoint, PointStatus>> {
+        let Some(anchors) = anchors else {
+            return par.map_init(
+                queries.len(),
+                256,
+                || self.evaluator(),
+                |ev, i| ev.jet_at(&queries[i], config),
+            );
+        };
+        let origin = self.index.origin;
+        let finite = |p: &Point| p.iter().all(|c| c.is_finite());
+        let near: Vec<Vec<(u32, f64)>> = par.map(queries.len(), 256, |i| {
+            let mut near = Vec::new();
+            if finite(&queries[i]) {
+                anchors.near(&(queries[i] - origin), &mut near);
+            }
+            near
+        });
+        let mut needed: Vec<u32> = near.iter().flatten().map(|&(a, _)| a).collect();
+        needed.sort_unstable();
+        needed.dedup();
+        let missing: Vec<u32> = needed
+            .iter()
+            .copied()
+            .filter(|a| !cache.contains_key(a))
+            .collect();
+        let values = par.map_init(
+            missing.len(),
+            16,
+            || self.evaluator(),
+            |ev, k| {
+                let at = anchors.point(missing[k] as usize);
+                ev.jet_at_local(&(at + origin), at, config)
+            },
+        );
+        cache.extend(missing.into_iter().zip(values));
+        let cache_ref = &*cache;
+        let results = par.map_init(
             queries.len(),
             256,
-            || self.evaluator(),
-            |ev, i| ev.jet_at(&queries[i], config),
-        )
+            || (self.evaluator(), Vec::new()),
+            |(ev, shared), i| {
+                let x = &queries[i];
+                if !finite(x) {
+                    return Err(PointStatus::InvalidQuery);
+                }
+                let local = x - origin;
+                shared.clear();
+                let mut own = None;
+                for &(a, d2) in &near[i] {
+                    let value = &cache_ref[&a];
+                    if d2 == 0.0 && *anchors.point(a as usize) == local {
+                        own = Some(value);
+                    }
+                    if let Ok(p) = value {
+                        shared.push((d2, p));
+                    }
+                }
+                if shared.len() == near[i].len()
+                    && let Some(p) = anchors.blend(x, &local, &origin, shared)
+                {
+                    return Ok(p);
+                }
+                match own {
+                    // The anchor's own jet, evaluated at the same internal point; only the
+                    // foot point moves with the world position.
+                    Some(value) => value.map(|p| JetPoint {
+                        foot: x + (p.foot - (local + origin)),
+                        ..p
+                    }),
+                    None => ev.jet_at_local(x, &local, config),
+                }
+            },
+        );
+        cache.retain(|a, _| needed.binary_search(a).is_ok());
+        results
     }
 
     /// Projects each query point onto the MLS surface and evaluates curvature there.

@@ -145,8 +145,9 @@ fn compare_with_witness(
             ..JetConfig::default()
         };
         let results = surface.jet_at_points(queries, &config, Parallelism::Rayon);
+        let mut share = mls_ad::ShareWitness::new(samples, h, &config);
         for (x, r) in queries.iter().zip(results) {
-            let w = mls_ad::jet_witness(&x.coords, samples, h, &config);
+            let w = witness(&mut share, x, samples, h, &config);
             let (j, w) = match (r, w) {
                 (Ok(j), Ok(w)) => (j, w),
                 // Heights only: a query off the noisy surface by more than its neighbours'
@@ -358,6 +359,20 @@ fn a_first_support_without_slopes_hands_no_noise_ratio_on() {
     assert!(later_with_slopes >= 8, "{later_with_slopes} of 16");
 }
 
+/// The witness of `jet_at_points` at `x`: the anchors' blend where they share `x`
+/// (`mls_ad::ShareWitness`), else the query's own jet.
+fn witness(
+    share: &mut mls_ad::ShareWitness<'_>,
+    x: &Point,
+    samples: &[Sample],
+    h: f64,
+    config: &JetConfig,
+) -> Result<mls_ad::JetWitness, JetRefusal> {
+    share
+        .shared(&x.coords)
+        .map_or_else(|| mls_ad::jet_witness(&x.coords, samples, h, config), Ok)
+}
+
 /// A standard normal deviate (Box–Muller).
 fn gaussian(rng: &mut ChaCha8Rng) -> f64 {
     let (a, b): (f64, f64) = (rng.random(), rng.random());
@@ -428,9 +443,10 @@ fn degree_two_candidates_match_their_witness_on_a_noisy_sphere() {
     };
     let (mut quadratic, mut worst_k, mut worst_error) = (0, 0.0f64, 0.0f64);
     let results = surface.jet_at_points(&queries, &config, Parallelism::Rayon);
+    let mut share = mls_ad::ShareWitness::new(&samples, h, &config);
     for (x, r) in queries.iter().zip(results) {
         let j = r.unwrap();
-        let w = mls_ad::jet_witness(&x.coords, &samples, h, &config).unwrap();
+        let w = witness(&mut share, x, &samples, h, &config).unwrap();
         worst_k = worst_k.max(same_choice_and_k(x, &j, &w));
         quadratic += usize::from(w.degree == 2);
         let pe = j.predicted_error();
@@ -512,8 +528,9 @@ fn outliers_and_robust_weights_match_their_witness_on_a_noisy_sphere() {
     };
     let (mut flagged, mut stray_flagged, mut quadratic, mut worst_k) = (0, 0, 0, 0.0f64);
     let results = surface.jet_at_points(&queries, &config, Parallelism::Rayon);
+    let mut share = mls_ad::ShareWitness::new(&samples, h, &config);
     for (i, (x, r)) in queries.iter().zip(results).enumerate() {
-        let w = mls_ad::jet_witness(&x.coords, &samples, h, &config);
+        let w = witness(&mut share, x, &samples, h, &config);
         let (j, w) = match (r, w) {
             (Ok(j), Ok(w)) => (j, w),
             (Err(PointStatus::Outlier), Err(JetRefusal::Outlier)) => {

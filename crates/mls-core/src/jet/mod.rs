@@ -43,10 +43,15 @@ use crate::math::{Matrix, Point, Vector, tangent_basis};
 use crate::status::PointStatus;
 
 mod algebra;
+pub(crate) mod anchors;
 mod fit;
 pub(crate) mod ladder;
 mod quadratic;
 
+pub use anchors::{
+    ANCHOR_CELL, ANCHOR_MAX_TURN, ANCHOR_MIN_COUNT, ANCHOR_MIN_SUPPORT, ANCHOR_REACH,
+    ANCHOR_RESIDUAL,
+};
 pub(crate) use fit::jet_fit;
 pub use fit::{JetScratch, fit};
 pub use quadratic::{
@@ -111,6 +116,10 @@ pub struct JetConfig {
     /// [`QUADRATIC_MAX_SAMPLES`] samples) join the candidates, each with its truncation bias
     /// predicted from a degree-4 fit on the largest ([`quadratic`]).
     pub quadratic: bool,
+    /// With the degree-2 candidates, whether a query where nearby anchors all chose degree 2 on
+    /// a support many cells wide takes their blend instead of its own fit ([`ANCHOR_CELL`] and
+    /// the constants beside it; `docs/derivation.md`, "Shared supports").
+    pub share: bool,
 }
 
 /// The first degree-2 support radius, in h.
@@ -131,6 +140,7 @@ impl Default for JetConfig {
             confidence: 3.0,
             normals: NormalData::Slopes,
             quadratic: true,
+            share: true,
         }
     }
 }

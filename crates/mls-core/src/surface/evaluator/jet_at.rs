@@ -16,7 +16,17 @@ impl Evaluator<'_> {
         if !x.iter().all(|c| c.is_finite()) {
             return Err(PointStatus::InvalidQuery);
         }
-        let local = x - self.surface.index.origin;
+        self.jet_at_local(x, &(x - self.surface.index.origin), config)
+    }
+
+    /// [`Self::jet_at`] at `local`, in the internal frame (`x` only places the foot point).
+    pub(crate) fn jet_at_local(
+        &mut self,
+        x: &Point,
+        local: &Point,
+        config: &JetConfig,
+    ) -> Result<JetPoint, PointStatus> {
+        let local = *local;
         let h = self.surface.kernel.h();
         let mut frame = None;
         let mut climb = Climb::new(std::mem::take(&mut self.ladder));

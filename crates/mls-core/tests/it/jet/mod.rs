@@ -246,3 +246,50 @@ fn outliers_are_flagged_and_do_not_spoil_their_neighbours() {
     assert_eq!(flagged.len(), strays);
     assert!(spoiled < 1.2 * base, "{spoiled:.2e} against {base:.2e}");
 }
+
+/// Shared supports (`mls_core::jet::anchors`): under noise of 0.2 spacing with heights only
+/// (where 90 % of the queries choose degree 2 on 6h or more), blending the anchors' jets is
+/// more accurate than each query fitting its own (measured on this cloud: k1 nRMS 1.94e-2
+/// blended, 2.35e-2 own fits: the blend smooths a little more); on the clean torus, where the
+/// degree-4 ladder resolves, no query is blended and every curvature is bitwise the unshared
+/// one's.
+#[test]
+fn shared_supports_blend_under_noise_only() {
+    let torus = Torus::new(6.0, 2.0);
+    let samples =
+        mls_shapes::surface_points(&mls_shapes::random_area_uniform(&torus, 20_000, SEED));
+    let clean: Vec<Point> = samples.iter().map(|s| s.point).collect();
+    let h = cli_h(&clean);
+    let noisy: Vec<Point> = mls_shapes::add_position_noise(&clean, 0.1 * h, SEED);
+    let normals = mls_shapes::perturb_normals(
+        &samples.iter().map(|s| s.normal).collect::<Vec<_>>(),
+        0.2,
+        SEED,
+    );
+    let shared = JetConfig {
+        normals: NormalData::Ignore,
+        ..JetConfig::default()
+    };
+    let own = JetConfig {
+        share: false,
+        ..shared
+    };
+    let none = vec![false; noisy.len()];
+    let (blended, _) = heights_only(&noisy, &normals, h, &shared, &none);
+    let (fitted, _) = heights_only(&noisy, &normals, h, &own, &none);
+    eprintln!("k1 nRMS: blended {blended:.2e}, own fits {fitted:.2e}");
+    assert!(blended < fitted, "{blended:.2e} against {fitted:.2e}");
+
+    let surface = MlsSurface::new(&clean, &normals, MlsConfig::new(h)).unwrap();
+    let queries: Vec<Point> = clean.iter().step_by(4).copied().collect();
+    let a = surface.jet_at_points(&queries, &shared, Parallelism::Rayon);
+    let b = surface.jet_at_points(&queries, &own, Parallelism::Rayon);
+    for (i, (a, b)) in a.iter().zip(&b).enumerate() {
+        let (a, b) = (a.as_ref().unwrap(), b.as_ref().unwrap());
+        assert_eq!(
+            (a.curvature, a.sd, a.bias, a.fit),
+            (b.curvature, b.sd, b.bias, b.fit),
+            "query {i}"
+        );
+    }
+}
