@@ -21,6 +21,8 @@ use crate::accuracy::{
 /// NaN truth in `cloud` and their own nearest-point truth here.
 pub(crate) struct NoisyCloud {
     pub cloud: Cloud,
+    /// The shape's unit normal at each point's nearest point (outliers included).
+    pub normal_truth: Vec<Vector>,
     pub outliers: Vec<usize>,
     pub outlier_truth: Vec<[f64; 2]>,
 }
@@ -40,6 +42,32 @@ fn torus_truth(torus: &Torus, points: &[Point]) -> Vec<[f64; 2]> {
         .collect()
 }
 
+fn torus_normals(torus: &Torus, points: &[Point]) -> Vec<Vector> {
+    points
+        .iter()
+        .map(|p| torus.closest_point(p).normal)
+        .collect()
+}
+
+/// The median and 95th percentile of the angle (degrees, sign aside) between `normals` and
+/// `truth`, over the points not in `skip`.
+fn angle_percentiles(normals: &[Vector], truth: &[Vector], skip: &[usize]) -> (f64, f64) {
+    let mut a: Vec<f64> = normals
+        .iter()
+        .zip(truth)
+        .enumerate()
+        .filter(|(i, _)| skip.binary_search(i).is_err())
+        .filter(|(_, (n, _))| n.iter().all(|c| c.is_finite()))
+        .map(|(_, (n, t))| n.dot(t).abs().min(1.0).acos().to_degrees())
+        .collect();
+    a.sort_unstable_by(f64::total_cmp);
+    let at = |q: f64| {
+        a.get(((a.len() as f64 - 1.0) * q).round() as usize)
+            .copied()
+    };
+    (at(0.5).unwrap_or(f64::NAN), at(0.95).unwrap_or(f64::NAN))
+}
+
 /// The noisy clouds of issue 37, for one seed.
 pub(crate) fn noisy_clouds(seed: u64) -> Vec<NoisyCloud> {
     let torus = Torus::new(6.0, 2.0);
@@ -49,26 +77,32 @@ pub(crate) fn noisy_clouds(seed: u64) -> Vec<NoisyCloud> {
     let clean = mls_shapes::surface_points(&mls_shapes::random_area_uniform(&torus, n, seed));
     let clean_points: Vec<Point> = clean.iter().map(|p| p.point).collect();
     let mut out = Vec::new();
-    let plain =
-        |name: String, points: Vec<Point>, truth: Vec<[f64; 2]>, normals: Vec<Vector>| NoisyCloud {
-            cloud: Cloud {
-                name,
-                points,
-                exact_normals: normals,
-                truth,
-            },
-            outliers: Vec::new(),
-            outlier_truth: Vec::new(),
-        };
+    let plain = |name: String,
+                 points: Vec<Point>,
+                 truth: Vec<[f64; 2]>,
+                 normals: Vec<Vector>,
+                 normal_truth: Vec<Vector>| NoisyCloud {
+        cloud: Cloud {
+            name,
+            points,
+            exact_normals: normals,
+            truth,
+        },
+        normal_truth,
+        outliers: Vec::new(),
+        outlier_truth: Vec::new(),
+    };
     let normals: Vec<Vector> = clean.iter().map(|p| p.normal).collect();
     for f in [0.05, 0.2] {
         let points = mls_shapes::add_position_noise(&clean_points, f * s, seed ^ 0x5eed);
         let truth = torus_truth(&torus, &points);
+        let normal_truth = torus_normals(&torus, &points);
         out.push(plain(
             format!("torus 6/2, random 40k, noise {f} spacing"),
             points,
             truth,
             normals.clone(),
+            normal_truth,
         ));
     }
     // 1 % outliers, each moved 3 to 10 spacings along its normal (either way), on the cloud
@@ -90,7 +124,9 @@ pub(crate) fn noisy_clouds(seed: u64) -> Vec<NoisyCloud> {
         for &i in &outliers {
             truth[i] = [f64::NAN; 2];
         }
+        let normal_truth = torus_normals(&torus, &points);
         out.push(NoisyCloud {
+            normal_truth,
             cloud: Cloud {
                 name: "torus 6/2, random 40k, noise 0.05 + 1 % outliers".into(),
                 points,
@@ -115,11 +151,13 @@ pub(crate) fn noisy_clouds(seed: u64) -> Vec<NoisyCloud> {
             })
             .collect();
         let truth = torus_truth(&torus, &points);
+        let normal_truth = torus_normals(&torus, &points);
         out.push(plain(
             "torus 6/2, top-down scanlines, z noise 0.2 spacing".into(),
             points,
             truth,
             scan.iter().map(|p| p.normal).collect(),
+            normal_truth,
         ));
     }
     {
@@ -134,19 +172,20 @@ pub(crate) fn noisy_clouds(seed: u64) -> Vec<NoisyCloud> {
         let s = spacing(area, samples.len());
         let clean: Vec<Point> = samples.iter().map(|x| x.surface.point).collect();
         let points = mls_shapes::add_position_noise(&clean, 0.1 * s, seed ^ 0xe11);
-        let truth = points
+        let (truth, normal_truth) = points
             .iter()
             .zip(&samples)
             .map(|(p, x)| {
                 let f = mls_shapes::closest_point_newton(&e, p, x.uv);
-                [f.surface.k1, f.surface.k2]
+                ([f.surface.k1, f.surface.k2], f.surface.normal)
             })
-            .collect();
+            .unzip();
         out.push(plain(
             "ellipsoid 3/2/1, random 20k, noise 0.1 spacing".into(),
             points,
             truth,
             samples.iter().map(|x| x.surface.normal).collect(),
+            normal_truth,
         ));
     }
     out
@@ -155,6 +194,8 @@ pub(crate) fn noisy_clouds(seed: u64) -> Vec<NoisyCloud> {
 /// One estimate: `(k1, k2)` and the predicted error where the method gives one.
 pub(crate) struct Run {
     pub k: Vec<[f64; 2]>,
+    /// The estimator's own unit normals, where it reports them.
+    pub normals: Option<Vec<Vector>>,
     pub sd: Option<Vec<[f64; 2]>>,
     pub seconds: f64,
 }
@@ -270,6 +311,11 @@ pub(crate) fn run_jet_diag(
                 .map(|r| r.map_or(nan, |p| p.predicted_error()))
                 .collect(),
         ),
+        normals: Some(
+            r.iter()
+                .map(|r| r.map_or(Vector::repeat(f64::NAN), |p| p.curvature.normal))
+                .collect(),
+        ),
         seconds: t.elapsed().as_secs_f64(),
     })
 }
@@ -284,6 +330,7 @@ fn run_adaptive(points: &[Point], normals: &[Vector], h: f64) -> Result<Run> {
             .map(|r| r.map_or(nan, |p| [p.curvature.k1, p.curvature.k2]))
             .collect(),
         sd: None,
+        normals: None,
         seconds: t.elapsed().as_secs_f64(),
     })
 }
@@ -324,6 +371,7 @@ pub(crate) fn peers(cloud: &Cloud, normals: &[Vector], h: f64) -> Result<Vec<Row
             let run = Run {
                 k: est,
                 sd: None,
+                normals: None,
                 seconds: t.elapsed().as_secs_f64(),
             };
             rows.push(row(format!("CGAL-style jet d{degree} k{k}"), cloud, &run));
@@ -397,7 +445,9 @@ pub(crate) fn explore(only: Option<&String>, with_peers: bool, write: bool) -> R
         let clean: Vec<Point> = grid.iter().map(|p| p.point).collect();
         let points = mls_shapes::add_position_noise(&clean, sigma, seed);
         let truth = torus_truth(&paper, &points);
+        let normal_truth = torus_normals(&paper, &points);
         clouds.push(NoisyCloud {
+            normal_truth,
             cloud: Cloud {
                 name: name.into(),
                 points,
@@ -429,6 +479,17 @@ pub(crate) fn explore(only: Option<&String>, with_peers: bool, write: bool) -> R
             ..JetConfig::default()
         };
         let run = run_jet_diag(&cloud.points, &normals, h, &default, Some(&cloud.truth))?;
+        // The normals' error against the shape's, outliers aside: those estimated (the frame
+        // and the orientation) and the jet's own (the output's nx, ny, nz).
+        let (est_median, est_p95) =
+            angle_percentiles(&normals, &noisy.normal_truth, &noisy.outliers);
+        let (jet_median, jet_p95) = run.normals.as_ref().map_or((f64::NAN, f64::NAN), |n| {
+            angle_percentiles(n, &noisy.normal_truth, &noisy.outliers)
+        });
+        let angles = format!(
+            "normal error (median / 95th percentile, degrees): estimated {est_median:.2} / \
+             {est_p95:.2}, the jet's output {jet_median:.2} / {jet_p95:.2}"
+        );
         let extra = outlier_report(noisy, &run);
         let mut r = row("jet (default)".into(), cloud, &run);
         r.method += &extra;
@@ -456,13 +517,16 @@ pub(crate) fn explore(only: Option<&String>, with_peers: bool, write: bool) -> R
         }
         writeln!(
             md,
-            "## {}\n\n{} points, h = {h:.4}, normals estimated in {normals_s:.2} s.\n\n\
+            "## {}\n\n{} points, h = {h:.4}, normals estimated in {normals_s:.2} s; {angles}.\n\n\
              | method | k1 nRMS | k2 nRMS | k1 error μ ± σ | failed | calibration | time (s) |\n\
              | --- | --- | --- | --- | --- | --- | --- |",
             cloud.name,
             cloud.points.len()
         )?;
-        println!("## {} (h = {h:.4}, normals {normals_s:.2}s)", cloud.name);
+        println!(
+            "## {} (h = {h:.4}, normals {normals_s:.2}s; {angles})",
+            cloud.name
+        );
         for r in &rows {
             let cal = r
                 .calibration

@@ -151,16 +151,23 @@ impl JetConfig {
         self.radius * std::f64::consts::SQRT_2.powi(self.scales.max(1) as i32 - 1)
     }
 
-    /// The largest support any fit of this configuration may gather, in units of h: the
-    /// ladder's top, or with heights only and [`Self::quadratic`] the largest degree-2 support
-    /// (what a tile's halo must hold).
+    /// How far from a query the samples that decide its result may lie, in units of h (what a
+    /// tile's halo must hold): the ladder's top support, or with heights only and
+    /// [`Self::quadratic`] the largest degree-2 support, and with [`Self::share`] besides the
+    /// blend's reach (the anchors a query blends lie within [`ANCHOR_REACH`] cells, each with
+    /// its own support).
     pub fn reach_radius(&self) -> f64 {
         let ladder = self.max_radius();
         if self.quadratic && self.normals == NormalData::Ignore {
-            ladder.max(
+            let support = ladder.max(
                 QUADRATIC_RADIUS
                     * std::f64::consts::SQRT_2.powi(QUADRATIC_SCALES.max(1) as i32 - 1),
-            )
+            );
+            if self.share {
+                support + ANCHOR_REACH * ANCHOR_CELL
+            } else {
+                support
+            }
         } else {
             ladder
         }

@@ -4,8 +4,8 @@
 use super::*;
 
 /// The reach of each estimator, with the millionth's margin: the kernel's support, the
-/// jet's largest radius (6 h by default; 8.5 h with heights only, the degree-2 candidates'),
-/// and 3 h more for estimated normals.
+/// jet's largest radius (6 h by default; 8.5 h with heights only, the degree-2 candidates',
+/// and 3 h more for the blend of shared supports), and 3 h more for estimated normals.
 #[test]
 fn reach_is_the_support_of_what_decides_a_point() {
     let h = 0.5;
@@ -23,14 +23,24 @@ fn reach_is_the_support_of_what_decides_a_point() {
         reach(h, Cutoff::Radius(5.0), Some(&jet), false),
         Some(jet.max_radius() * h * margin)
     );
-    // Heights only: the degree-2 candidates' largest support, 3h·√2³ ≈ 8.49 h.
+    // Heights only: the degree-2 candidates' largest support, 3h·√2³ ≈ 8.49 h, and the
+    // blend's reach of 2 cells of 1.5 h (its anchors' supports).
     let heights = JetConfig {
         normals: crate::NormalData::Ignore,
+        share: false,
         ..JetConfig::default()
     };
     assert_eq!(
         reach(h, Cutoff::Radius(5.0), Some(&heights), true),
         Some((3.0 * 2f64.sqrt().powi(3) * h + NORMALS_REACH * h) * margin)
+    );
+    let shared = JetConfig {
+        share: true,
+        ..heights
+    };
+    assert_eq!(
+        reach(h, Cutoff::Radius(5.0), Some(&shared), true),
+        Some(((3.0 * 2f64.sqrt().powi(3) + 3.0) * h + NORMALS_REACH * h) * margin)
     );
     assert_eq!(reach(h, Cutoff::None, None, true), None);
 }
