@@ -45,6 +45,7 @@ pub struct PointStream {
     template: Option<LasTemplate>,
     bounds: ([f64; 3], [f64; 3]),
     record_len: u64,
+    scans_have_poses: bool,
 }
 
 impl PointStream {
@@ -74,6 +75,7 @@ impl PointStream {
             template: None,
             bounds: ([0.0; 3], [0.0; 3]),
             record_len: 0,
+            scans_have_poses: false,
         };
         match format {
             FileFormat::Las | FileFormat::Laz => {
@@ -102,7 +104,7 @@ impl PointStream {
         // The first pass: count, box, normals, record size.
         let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
         let mut record = 0;
-        let (mut len, mut normals) = (0, false);
+        let (mut len, mut normals, mut poses) = (0, false, false);
         let notes = stream.read(PROFILE_BATCH, &mut |cloud: PointCloud| {
             for p in &cloud.points {
                 for k in 0..3 {
@@ -112,6 +114,10 @@ impl PointStream {
             }
             len += cloud.points.len() as u64;
             normals = cloud.normals.is_some();
+            poses = cloud
+                .scans
+                .as_ref()
+                .is_some_and(|s| s.origins.iter().all(Option::is_some));
             record = 24
                 + if normals { 24 } else { 0 }
                 + cloud
@@ -129,6 +135,7 @@ impl PointStream {
         stream.notes = notes;
         stream.bounds = (lo, hi);
         stream.record_len = record;
+        stream.scans_have_poses = poses;
         Ok(stream)
     }
 
@@ -200,6 +207,13 @@ impl PointStream {
     /// keep loosely; measured, so exact, for the other formats.
     pub fn bounds(&self) -> ([f64; 3], [f64; 3]) {
         self.bounds
+    }
+
+    /// Whether the file is E57 and every scan has a pose: then every batch's
+    /// [`PointCloud::scans`] gives each point's scanner position
+    /// ([`Scans::viewpoints`](crate::Scans::viewpoints)).
+    pub fn scans_have_poses(&self) -> bool {
+        self.scans_have_poses
     }
 
     /// Bytes a point takes once read: its record for LAS/LAZ; coordinates, normals and
