@@ -15,10 +15,18 @@ use std::io::BufReader;
 use std::path::{Path, PathBuf};
 
 use crate::text::TextSchema;
-use crate::{FileFormat, LasReader, LasTemplate, PointCloud, ReadError, ReadOptions, SLOT_NAMES};
+use crate::{
+    AttributeType, FileFormat, LasReader, LasTemplate, PointCloud, ReadError, ReadOptions,
+    SLOT_NAMES,
+};
 
 /// Points per batch of the first pass over a file that is not LAS.
 const PROFILE_BATCH: u64 = 1 << 16;
+
+/// The most points of a batch of [`PointStream::for_each_batch`], whatever the caller asks:
+/// tens of MB with the attributes, the size of a LAS batch ([`LasReader::batch_len`]). A
+/// larger batch is no faster, and would cost memory beside the caller's own per point.
+const MAX_BATCH: u64 = 1 << 18;
 
 /// How a format is read again.
 #[derive(Debug)]
@@ -46,6 +54,7 @@ pub struct PointStream {
     bounds: ([f64; 3], [f64; 3]),
     record_len: u64,
     scans_have_poses: bool,
+    attributes: Vec<(String, AttributeType)>,
 }
 
 impl PointStream {
@@ -76,6 +85,7 @@ impl PointStream {
             bounds: ([0.0; 3], [0.0; 3]),
             record_len: 0,
             scans_have_poses: false,
+            attributes: Vec::new(),
         };
         match format {
             FileFormat::Las | FileFormat::Laz => {
@@ -87,6 +97,7 @@ impl PointStream {
                 stream.template = Some(reader.template().clone());
                 stream.bounds = reader.header_bounds();
                 stream.record_len = reader.record_len() as u64;
+                stream.attributes = columns(&reader.empty_cloud(0));
                 return Ok(stream);
             }
             FileFormat::Ply => stream.kind = Kind::Ply,
@@ -105,6 +116,7 @@ impl PointStream {
         let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
         let mut record = 0;
         let (mut len, mut normals, mut poses) = (0, false, false);
+        let mut attributes = Vec::new();
         let notes = stream.read(PROFILE_BATCH, &mut |cloud: PointCloud| {
             for p in &cloud.points {
                 for k in 0..3 {
@@ -114,6 +126,7 @@ impl PointStream {
             }
             len += cloud.points.len() as u64;
             normals = cloud.normals.is_some();
+            attributes = columns(&cloud);
             poses = cloud
                 .scans
                 .as_ref()
@@ -136,6 +149,7 @@ impl PointStream {
         stream.bounds = (lo, hi);
         stream.record_len = record;
         stream.scans_have_poses = poses;
+        stream.attributes = attributes;
         Ok(stream)
     }
 
@@ -209,6 +223,11 @@ impl PointStream {
         self.bounds
     }
 
+    /// The name and type of every attribute, in the order of each batch's.
+    pub fn attributes(&self) -> &[(String, AttributeType)] {
+        &self.attributes
+    }
+
     /// Whether the file is E57 and every scan has a pose: then every batch's
     /// [`PointCloud::scans`] gives each point's scanner position
     /// ([`Scans::viewpoints`](crate::Scans::viewpoints)).
@@ -222,8 +241,9 @@ impl PointStream {
         self.record_len
     }
 
-    /// Reads every point from the start of the file in batches of at most `max` points,
-    /// calling `f` with each batch's first index and cloud (its attributes left out unless
+    /// Reads every point from the start of the file in batches of at most `max` points (and
+    /// at most 2^18, or a LAS file's [`LasReader::batch_len`]), calling `f` with each batch's
+    /// first index and cloud (its attributes left out unless
     /// `with_attributes`): the same points, normals and attributes, in the same order, as a
     /// whole read gives.
     ///
@@ -257,7 +277,7 @@ impl PointStream {
                 first += n as u64;
             }
         } else {
-            self.read(max, &mut |mut cloud: PointCloud| {
+            self.read(max.min(MAX_BATCH), &mut |mut cloud: PointCloud| {
                 if !with_attributes {
                     cloud.attributes.clear();
                 }
@@ -279,4 +299,13 @@ impl PointStream {
         }
         Ok(())
     }
+}
+
+/// The name and type of each of a cloud's attributes.
+fn columns(cloud: &PointCloud) -> Vec<(String, AttributeType)> {
+    cloud
+        .attributes
+        .iter()
+        .map(|a| (a.name.clone(), a.data.ty()))
+        .collect()
 }
