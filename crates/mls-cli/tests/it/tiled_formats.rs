@@ -333,3 +333,35 @@ fn a_bad_input_of_a_tiled_run_is_a_clear_error() {
         assert_nothing_left(dir.path());
     }
 }
+
+/// An attribute that LAS output cannot hold (a name over 32 bytes) is refused before any
+/// work, as in memory.
+#[test]
+fn a_tiled_run_refuses_an_attribute_las_cannot_hold_before_any_work() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("long.ply");
+    let (points, _, _) = terrain(20_000, 80.0, SEED, usize::MAX);
+    let values: Vec<f64> = points.iter().map(|p| p[2]).collect();
+    let name = "an_attribute_name_of_more_than_32_bytes";
+    let columns = [
+        Column::component("x", &points, Axis::X),
+        Column::component("y", &points, Axis::Y),
+        Column::component("z", &points, Axis::Z),
+        Column::f64(name, &values),
+    ];
+    mls_io::write_point_cloud_as(&input, FileFormat::Ply, &columns, PlyFormat::default()).unwrap();
+    let out = dir.path().join("out.las");
+    let r = run(mlscurv()
+        .arg("curvature")
+        .arg(&input)
+        .arg("-o")
+        .arg(&out)
+        .args(["--h", "1.1", "--quiet", "--memory", "65MiB"]));
+    assert_one_line_error(
+        &r,
+        &input.display().to_string(),
+        &[name, "a LAS extra-bytes name holds at most 32"],
+    );
+    assert!(!out.exists());
+    assert_nothing_left(dir.path());
+}
