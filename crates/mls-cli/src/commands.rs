@@ -36,9 +36,9 @@ pub fn curvature(a: CurvatureArgs) -> Result<()> {
         at: a.at,
         adaptive: a.adaptive,
     };
-    if let Some(budget) = tiled_budget(&a, &output)? {
+    if let Some((budget, format)) = tiled_budget(&a, &output)? {
         return pipeline::with_threads(s.run.threads, || {
-            curvature_tiled(&a, &options, &output, budget)
+            curvature_tiled(&a, &options, &output, budget, format)
         });
     }
     pipeline::with_threads(s.run.threads, || {
@@ -157,26 +157,35 @@ pub fn curvature(a: CurvatureArgs) -> Result<()> {
     })
 }
 
-/// The memory budget of a tiled run, if the input needs one: a LAS/LAZ file whose points do
-/// not fit in `--memory` (default: the available memory less a fifth).
-fn tiled_budget(a: &CurvatureArgs, output: &pipeline::Output) -> Result<Option<u64>> {
+/// The memory budget of a tiled run and the input's format, if the input needs one: a file
+/// whose points do not fit in `--memory` (default: the available memory less a fifth).
+/// Standard input, read whole, refuses `--memory`.
+fn tiled_budget(
+    a: &CurvatureArgs,
+    output: &pipeline::Output,
+) -> Result<Option<(u64, mls_io::FileFormat)>> {
     use mls_io::FileFormat;
     let name = pipeline::input_name(&a.input);
+    if name == pipeline::STDIN_NAME {
+        if let Some(budget) = a.memory {
+            anyhow::bail!(
+                "{name}: --memory {}: standard input is read whole and its size is not known \
+                 before; give the file's path to have it evaluated in tiles",
+                mls_cli::tiled::describe_size(budget)
+            );
+        }
+        return Ok(None);
+    }
     let format = a
         .out
         .formats
         .input_format
         .map(FileFormat::from)
         .or_else(|| FileFormat::from_path(&a.input));
-    let las =
-        matches!(format, Some(FileFormat::Las | FileFormat::Laz)) && name != pipeline::STDIN_NAME;
-    if !las {
-        if let Some(budget) = a.memory {
-            in_memory_within(&a.input, format, budget, a.surface.run.quiet)?;
-        }
+    let Some(format) = format else {
+        // An unknown extension: the reader refuses the file, saying so.
         return Ok(None);
-    }
-    let points = mls_io::LasReader::open(&a.input)?.len();
+    };
     let (budget, given) = match a.memory {
         Some(b) => (b, true),
         None => match mls_cli::tiled::available_memory() {
@@ -184,75 +193,52 @@ fn tiled_budget(a: &CurvatureArgs, output: &pipeline::Output) -> Result<Option<u
             None => return Ok(None),
         },
     };
-    if mls_cli::tiled::fits_in_memory(points, budget) {
+    // A text file of `size` bytes holds at most `size / 6` points (`0 0 0` and a line end
+    // each): when even that many fit, its lines are not counted.
+    if matches!(format, FileFormat::Xyz | FileFormat::Csv)
+        && let Ok(meta) = std::fs::metadata(&a.input)
+        && !given
+        && mls_cli::tiled::fits_in_memory(meta.len() / 6, budget)
+    {
         return Ok(None);
     }
-    if !matches!(output.format(), FileFormat::Las | FileFormat::Laz)
-        || matches!(output, pipeline::Output::Stdout(_))
-    {
-        anyhow::bail!(
-            "{name}: {points} points do not fit in {} MiB of memory and are evaluated in tiles, \
-             whose output must be a .las or .laz file",
-            budget >> 20
-        );
-    }
-    if !given && !a.surface.run.quiet {
-        eprintln!(
-            "mlscurv: note: {name}: {points} points need about {} MiB, more than the {} MiB \
-             available: evaluating in tiles (--memory sets the budget)",
-            (points * mls_cli::tiled::BYTES_PER_POINT) >> 20,
-            budget >> 20
-        );
-    }
-    Ok(Some(budget))
-}
-
-/// Checks `--memory` for an input that is read whole (not LAS/LAZ, or standard input) before
-/// any work: refused when the in-memory run's estimate (the tiled run's, per point and
-/// besides) exceeds it, else a note says it fits.
-fn in_memory_within(
-    input: &std::path::Path,
-    format: Option<mls_io::FileFormat>,
-    budget: u64,
-    quiet: bool,
-) -> Result<()> {
-    let name = pipeline::input_name(input);
-    let refuse = |why: String| {
-        anyhow::anyhow!(
-            "{name}: --memory {}: {why}; only LAS and LAZ files are evaluated in tiles \
-             (convert it to LAZ, e.g. with PDAL, or give a larger --memory)",
-            mls_cli::tiled::describe_size(budget)
-        )
+    let points = match format {
+        FileFormat::Las | FileFormat::Laz => mls_io::LasReader::open(&a.input)?.len(),
+        _ => mls_io::point_count(&a.input, format)?,
     };
-    if name == pipeline::STDIN_NAME {
-        return Err(refuse(
-            "standard input is read whole and its size is not known before".into(),
-        ));
-    }
-    let Some(format) = format else {
-        // An unknown extension: the reader refuses the file, saying so.
-        return Ok(());
-    };
-    let points = mls_io::point_count(input, format)?;
     let need = mls_cli::tiled::in_memory_bytes(points);
-    if need > budget {
-        return Err(refuse(format!(
-            "its {points} points need about {} in memory (estimated: {} bytes a point and {} \
-             besides), and it is read whole",
-            mls_cli::tiled::describe_size(need),
-            mls_cli::tiled::BYTES_PER_POINT,
-            mls_cli::tiled::describe_size(mls_cli::tiled::FIXED_BYTES)
-        )));
+    if mls_cli::tiled::fits_in_memory(points, budget) {
+        if given && !a.surface.run.quiet {
+            eprintln!(
+                "mlscurv: note: {name}: {points} points need about {}, within --memory {}: \
+                 evaluating in memory",
+                mls_cli::tiled::describe_size(need),
+                mls_cli::tiled::describe_size(budget)
+            );
+        }
+        return Ok(None);
     }
-    if !quiet {
-        eprintln!(
-            "mlscurv: note: {name}: {points} points need about {}, within --memory {}: \
-             evaluating in memory",
-            mls_cli::tiled::describe_size(need),
+    if matches!(output, pipeline::Output::Stdout(_)) {
+        anyhow::bail!(
+            "{name}: {points} points do not fit in {} of memory and are evaluated in tiles, \
+             whose output must be a file",
             mls_cli::tiled::describe_size(budget)
         );
     }
-    Ok(())
+    if !a.surface.run.quiet {
+        eprintln!(
+            "mlscurv: note: {name}: {points} points need about {}, more than {}{}: \
+             evaluating in tiles",
+            mls_cli::tiled::describe_size(need),
+            mls_cli::tiled::describe_size(budget),
+            if given {
+                " (--memory)"
+            } else {
+                " available (--memory sets the budget)"
+            }
+        );
+    }
+    Ok(Some((budget, format)))
 }
 
 fn curvature_tiled(
@@ -260,6 +246,7 @@ fn curvature_tiled(
     options: &CurvatureOptions,
     output: &pipeline::Output,
     budget: u64,
+    input_format: mls_io::FileFormat,
 ) -> Result<()> {
     let s = &a.surface;
     let pipeline::Output::File(path, format) = output else {
@@ -268,8 +255,11 @@ fn curvature_tiled(
     let mut t = Timings::new(interactive(s.run.quiet));
     let run = mls_cli::tiled::TiledRun {
         input: &a.input,
+        input_format,
+        columns: s.columns.as_ref(),
         output: path,
         format: *format,
+        ascii: a.out.ascii,
         options,
         budget,
         temp_dir: a.temp_dir.as_deref(),

@@ -184,12 +184,11 @@ struct CurvatureArgs {
     /// `--method paper` only (the jet chooses its support per point by itself).
     #[arg(long)]
     adaptive: bool,
-    /// Memory budget for a LAS/LAZ input (e.g. `2GiB`, `512M`): a cloud that does not fit is
-    /// evaluated in spatial tiles with halos through temporary files, with the results of one
-    /// whole run (bitwise with the file's normals and a given --h). Default: the machine's
-    /// available memory, less a fifth. The output must then be LAS or LAZ. Other inputs are
-    /// read whole: a budget their run would exceed (about 400 bytes a point and 64 MiB) is
-    /// refused before any work.
+    /// Memory budget (e.g. `2GiB`, `512M`): an input file that does not fit (about 400 bytes a
+    /// point and 64 MiB) is read in batches and evaluated in spatial tiles with halos through
+    /// temporary files, with the results of one whole run (bitwise with the file's normals and
+    /// a given --h), written to a file in any output format. Default: the machine's available
+    /// memory, less a fifth. Refused for standard input, which is read whole.
     #[arg(long, value_parser = mls_cli::tiled::parse_size)]
     memory: Option<u64>,
     /// Directory for the temporary tiles of a tiled run (default: the output's directory).

@@ -15,7 +15,7 @@ use std::collections::HashSet;
 
 pub use data::AttributeData;
 pub(crate) use scalar::{Le, Scalar, scatter_le};
-pub(crate) use text_column::TextColumn;
+pub(crate) use text_column::{TextColumn, TextColumnType};
 
 /// The type of an attribute's values: the integer and float types that PLY, LAS extra bytes
 /// and the LAS point formats use. Integers stay integers and floats keep their width, so an

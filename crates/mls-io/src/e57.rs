@@ -30,6 +30,75 @@ pub(crate) fn record_count<R: Read + Seek>(reader: R, file: &str) -> Result<u64,
 
 /// Reads every scan of an E57 file from `reader`; `file` names it in errors.
 pub(crate) fn read<R: Read + Seek>(reader: R, file: &str) -> Result<ReadOutcome, ReadError> {
+    crate::one_batch(|sink| read_batches(reader, file, u64::MAX, sink))
+}
+
+/// One batch of points on its way to a [`PointCloud`].
+struct Batch {
+    points: Vec<[f64; 3]>,
+    scan_of_point: Vec<u32>,
+    intensity: Option<AttributeData>,
+    colour: [Option<AttributeData>; 3],
+}
+
+impl Batch {
+    fn new(
+        capacity: usize,
+        intensity: Option<AttributeType>,
+        colour: Option<AttributeType>,
+    ) -> Self {
+        let column =
+            |ty: Option<AttributeType>| ty.map(|ty| AttributeData::with_capacity(ty, capacity));
+        Self {
+            points: Vec::with_capacity(capacity),
+            scan_of_point: Vec::with_capacity(capacity),
+            intensity: column(intensity),
+            colour: [column(colour), column(colour), column(colour)],
+        }
+    }
+
+    fn finish(self, origins: &[Option<[f64; 3]>]) -> PointCloud {
+        let mut attributes = vec![Attribute {
+            name: "scan".into(),
+            data: AttributeData::U32(self.scan_of_point.clone()),
+        }];
+        if let Some(data) = self.intensity {
+            attributes.push(Attribute {
+                name: "intensity".into(),
+                data,
+            });
+        }
+        for (name, data) in ["red", "green", "blue"].into_iter().zip(self.colour) {
+            if let Some(data) = data {
+                attributes.push(Attribute {
+                    name: name.into(),
+                    data,
+                });
+            }
+        }
+        PointCloud {
+            points: self.points,
+            normals: None,
+            attributes,
+            las: None,
+            scans: Some(Scans {
+                origins: origins.to_vec(),
+                scan_of_point: self.scan_of_point,
+            }),
+        }
+    }
+}
+
+/// Reads every scan of an E57 file as [`read`] does, handing the points to `sink` in clouds
+/// of at most `max` points, in file order, each with every scan's origin and its own points'
+/// scans in [`PointCloud::scans`] (an empty cloud for a file without valid points); returns
+/// the notes (none).
+pub(crate) fn read_batches<R: Read + Seek, E: From<ReadError>>(
+    reader: R,
+    file: &str,
+    max: u64,
+    sink: &mut dyn FnMut(PointCloud) -> Result<(), E>,
+) -> Result<Vec<String>, E> {
     let error = |message: String| ReadError::E57 {
         file: file.to_owned(),
         message,
@@ -38,23 +107,24 @@ pub(crate) fn read<R: Read + Seek>(reader: R, file: &str) -> Result<ReadOutcome,
         E57Reader::new(reader).map_err(|e| error(format!("not a readable E57 file: {e}")))?;
     let scans = e57.pointclouds();
     if scans.is_empty() {
-        return Err(error(
-            "an E57 file without scans (its data3D list is empty)".into(),
-        ));
+        return Err(error("an E57 file without scans (its data3D list is empty)".into()).into());
     }
     for (s, pc) in scans.iter().enumerate() {
         if !pc.has_cartesian() && !pc.has_spherical() {
             return Err(error(format!(
                 "E57 scan {s}{}: no Cartesian or spherical coordinates",
                 scan_name(pc)
-            )));
+            ))
+            .into());
         }
     }
+    let max = max.max(1);
     let capacity = scans
         .iter()
         .map(|pc| pc.records)
         .sum::<u64>()
-        .min(MAX_PREALLOCATED) as usize;
+        .min(MAX_PREALLOCATED)
+        .min(max) as usize;
     let intensity_type = value_type(&scans, &[RecordName::Intensity]);
     let colour_type = value_type(
         &scans,
@@ -64,26 +134,20 @@ pub(crate) fn read<R: Read + Seek>(reader: R, file: &str) -> Result<ReadOutcome,
             RecordName::ColorBlue,
         ],
     );
-    let column =
-        |ty: Option<AttributeType>| ty.map(|ty| AttributeData::with_capacity(ty, capacity));
-    let mut intensity = column(intensity_type);
-    let mut colour = [
-        column(colour_type),
-        column(colour_type),
-        column(colour_type),
-    ];
-    let mut points = Vec::with_capacity(capacity);
-    let mut scan_of_point: Vec<u32> = Vec::with_capacity(capacity);
-    let mut origins = Vec::with_capacity(scans.len());
-
+    let origins: Vec<Option<[f64; 3]>> = scans
+        .iter()
+        .map(|pc| {
+            pc.transform
+                .as_ref()
+                .map(|t| [t.translation.x, t.translation.y, t.translation.z])
+        })
+        .collect();
+    let fresh = || Batch::new(capacity, intensity_type, colour_type);
+    let mut batch = fresh();
+    let mut handed = false;
     for (s, pc) in scans.iter().enumerate() {
         let name = scan_name(pc);
         let index = u32::try_from(s).map_err(|_| error("more than 2^32 scans".into()))?;
-        origins.push(
-            pc.transform
-                .as_ref()
-                .map(|t| [t.translation.x, t.translation.y, t.translation.z]),
-        );
         let mut it = e57
             .pointcloud_simple(pc)
             .map_err(|e| error(format!("E57 scan {s}{name}: {e}")))?;
@@ -100,53 +164,31 @@ pub(crate) fn read<R: Read + Seek>(reader: R, file: &str) -> Result<ReadOutcome,
             if ![x, y, z].iter().all(|c| c.is_finite()) {
                 return Err(error(format!(
                     "E57 scan {s}{name}, point {i}: coordinate ({x}, {y}, {z}) is not finite"
-                )));
+                ))
+                .into());
             }
-            points.push([x, y, z]);
-            scan_of_point.push(index);
-            if let Some(column) = &mut intensity {
+            batch.points.push([x, y, z]);
+            batch.scan_of_point.push(index);
+            if let Some(column) = &mut batch.intensity {
                 push(column, p.intensity);
             }
             let rgb = p.color.map(|c| [c.red, c.green, c.blue]);
-            for (k, column) in colour.iter_mut().enumerate() {
+            for (k, column) in batch.colour.iter_mut().enumerate() {
                 if let Some(column) = column {
                     push(column, rgb.map(|c| c[k]));
                 }
             }
+            if batch.points.len() as u64 >= max {
+                let full = std::mem::replace(&mut batch, fresh());
+                handed = true;
+                sink(full.finish(&origins))?;
+            }
         }
     }
-
-    let mut attributes = vec![Attribute {
-        name: "scan".into(),
-        data: AttributeData::U32(scan_of_point.clone()),
-    }];
-    if let Some(data) = intensity {
-        attributes.push(Attribute {
-            name: "intensity".into(),
-            data,
-        });
+    if !handed || !batch.points.is_empty() {
+        sink(batch.finish(&origins))?;
     }
-    for (name, data) in ["red", "green", "blue"].into_iter().zip(colour) {
-        if let Some(data) = data {
-            attributes.push(Attribute {
-                name: name.into(),
-                data,
-            });
-        }
-    }
-    Ok(ReadOutcome {
-        cloud: PointCloud {
-            points,
-            normals: None,
-            attributes,
-            las: None,
-            scans: Some(Scans {
-                origins,
-                scan_of_point,
-            }),
-        },
-        notes: Vec::new(),
-    })
+    Ok(Vec::new())
 }
 
 /// ` ("name")` for a scan with a name, for messages.

@@ -199,6 +199,17 @@ pub enum ReadError {
         /// What is wrong.
         message: String,
     },
+    /// A file read more than once ([`PointStream`](crate::PointStream)) gave a different
+    /// number of points than the first time: it changed meanwhile.
+    #[error("{file}: the file changed while it was read: {first} points the first time, {now} now")]
+    Changed {
+        /// The file.
+        file: String,
+        /// The points found the first time.
+        first: u64,
+        /// The points found this time.
+        now: u64,
+    },
 }
 
 /// Why a table could not be written. On any of these the destination file is untouched.
@@ -255,6 +266,17 @@ pub enum WriteError {
         column: String,
         /// Its length.
         len: usize,
+    },
+    /// A table written in chunks ([`write_point_cloud_chunks`](crate::write_point_cloud_chunks))
+    /// got another number of rows than it declared (the PLY header holds the count).
+    #[error("{file}: {declared} rows declared, but {written} given")]
+    RowCount {
+        /// The destination.
+        file: String,
+        /// The rows declared.
+        declared: u64,
+        /// The rows given.
+        written: u64,
     },
     /// A column name would not survive a round trip through PLY or CSV.
     #[error("{file}: invalid column name {name:?}: {reason}")]

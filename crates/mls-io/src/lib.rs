@@ -45,6 +45,7 @@ mod error;
 mod las;
 mod lines;
 mod ply;
+mod stream;
 mod text;
 mod write;
 
@@ -56,12 +57,13 @@ pub use attributes::{Attribute, AttributeData, AttributeType, rename_clashes};
 pub use columns::{ColumnNames, ReadOptions, UNIT_TOLERANCE};
 pub use error::{ReadError, WriteError};
 pub use las::{LasReader, LasSink, LasTemplate, creation_date as las_creation_date};
+pub use stream::PointStream;
 pub use text::{read_csv, read_csv_with, read_xyz, read_xyz_with};
 pub use write::{
-    Axis, Column, ColumnData, PlyFormat, WriteOptions, check_writable, write_csv, write_csv_to,
-    write_las, write_las_chunks, write_ply, write_ply_to, write_point_cloud, write_point_cloud_as,
-    write_point_cloud_as_with, write_point_cloud_to, write_point_cloud_to_with, write_xyz,
-    write_xyz_to,
+    Axis, ChunkSink, Column, ColumnData, PlyFormat, WriteOptions, check_writable, write_csv,
+    write_csv_to, write_las, write_las_chunks, write_ply, write_ply_to, write_point_cloud,
+    write_point_cloud_as, write_point_cloud_as_with, write_point_cloud_chunks,
+    write_point_cloud_to, write_point_cloud_to_with, write_xyz, write_xyz_to,
 };
 
 /// The fields the readers look for, in the order of the slots of a row.
@@ -516,4 +518,78 @@ impl CloudBuilder {
             scans: None,
         }
     }
+}
+
+/// Rows collected into clouds of at most `max` points, each handed to `sink` once full: a
+/// reader streams a file larger than memory through it, and reads a whole file as one batch
+/// of unbounded size. The last batch, possibly empty when it is the only one, is handed on at
+/// [`Batches::finish`].
+pub(crate) struct Batches<'s, E> {
+    /// The batch being filled; a reader pushes a row's attributes into it, then calls
+    /// [`Batches::push`] with the row's geometry.
+    cloud: CloudBuilder,
+    /// A new, empty batch with the reader's columns.
+    fresh: Box<dyn Fn() -> CloudBuilder + 's>,
+    max: u64,
+    sink: &'s mut dyn FnMut(PointCloud) -> Result<(), E>,
+    handed: bool,
+}
+
+impl<'s, E> Batches<'s, E> {
+    pub(crate) fn new(
+        max: u64,
+        fresh: Box<dyn Fn() -> CloudBuilder + 's>,
+        sink: &'s mut dyn FnMut(PointCloud) -> Result<(), E>,
+    ) -> Self {
+        Self {
+            cloud: fresh(),
+            fresh,
+            max: max.max(1),
+            sink,
+            handed: false,
+        }
+    }
+
+    /// The batch being filled, for the row's attributes.
+    pub(crate) fn cloud(&mut self) -> &mut CloudBuilder {
+        &mut self.cloud
+    }
+
+    /// Ends a row with its values in the order of [`SLOT_NAMES`]; hands the batch on when
+    /// it is full.
+    pub(crate) fn push(&mut self, values: [f64; 6]) -> Result<(), E> {
+        self.cloud.push(values);
+        if self.cloud.points.len() as u64 >= self.max {
+            let full = std::mem::replace(&mut self.cloud, (self.fresh)());
+            self.handed = true;
+            (self.sink)(full.finish())?;
+        }
+        Ok(())
+    }
+
+    /// Hands on the last batch: the rows since the last full one, or an empty cloud if no
+    /// batch was handed on before.
+    pub(crate) fn finish(self) -> Result<(), E> {
+        if !self.handed || !self.cloud.points.is_empty() {
+            (self.sink)(self.cloud.finish())?;
+        }
+        Ok(())
+    }
+}
+
+/// Reads a whole file through a batch reader `read` as one batch of unbounded size.
+fn one_batch(
+    read: impl FnOnce(
+        &mut dyn FnMut(PointCloud) -> Result<(), ReadError>,
+    ) -> Result<Vec<String>, ReadError>,
+) -> Result<ReadOutcome, ReadError> {
+    let mut whole = None;
+    let notes = read(&mut |cloud| {
+        whole = Some(cloud);
+        Ok(())
+    })?;
+    Ok(ReadOutcome {
+        cloud: whole.unwrap_or_default(),
+        notes,
+    })
 }

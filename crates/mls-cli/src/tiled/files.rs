@@ -1,5 +1,5 @@
 //! The files of a tiled run: sizes and memory, the temporary directory (removed on Ctrl-C),
-//! and the input read chunk by chunk.
+//! and the tiles' files.
 
 use std::fs::{File, OpenOptions};
 use std::io::{BufReader, BufWriter, Read, Seek, SeekFrom, Write};
@@ -7,7 +7,6 @@ use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 
 use anyhow::{Context, Result};
-use mls_io::LasReader;
 
 /// The budget in bytes from the machine's available memory (Linux: `MemAvailable`), leaving a
 /// fifth to the rest of the system; `None` where it cannot be read.
@@ -121,38 +120,6 @@ impl Drop for Workspace {
         if let Ok(mut paths) = CLEANUP.lock() {
             paths.clear();
         }
-    }
-}
-
-pub(super) fn open_reader(input: &Path) -> Result<LasReader> {
-    Ok(LasReader::open(input)?)
-}
-
-/// Reads every point of `input` in chunks of at most `max_batch` points, calling `f` with
-/// each chunk's first index and cloud.
-pub(super) fn for_each_chunk(
-    input: &Path,
-    with_attributes: bool,
-    max_batch: u64,
-    mut f: impl FnMut(u64, mls_io::PointCloud) -> Result<()>,
-) -> Result<()> {
-    let mut reader = open_reader(input)?;
-    let mut first = 0u64;
-    // Several LAZ chunks per thread, about 30 MB of points and attributes, unless the caller
-    // keeps more per point than that.
-    let batch = reader.batch_len().min(max_batch).max(1);
-    loop {
-        let mut chunk = reader.empty_cloud(batch as usize);
-        if !with_attributes {
-            // Nothing to decode them into: they are skipped.
-            chunk.attributes.clear();
-        }
-        let n = reader.read_into(&mut chunk, batch)?;
-        if n == 0 {
-            return Ok(());
-        }
-        f(first, chunk)?;
-        first += n as u64;
     }
 }
 

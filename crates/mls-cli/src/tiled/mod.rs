@@ -1,6 +1,8 @@
-//! `mlscurv curvature` on a LAS/LAZ cloud larger than memory: tiles with halos on disk.
+//! `mlscurv curvature` on a cloud larger than memory: tiles with halos on disk.
 //!
-//! Four streaming passes over the input, and the tiles one at a time in between:
+//! The input is read in batches ([`mls_io::PointStream`]: LAS/LAZ, PLY, XYZ/CSV, E57), in
+//! four streaming passes, and the tiles one at a time in between (a file that is not LAS is
+//! read once more first, for its box and, for text, what its columns are):
 //! 1. *scan*: the exact bounding box (the whole cloud's [`Frame`]) and the points per cell of
 //!    a grid ([`mls_core::tiling`]);
 //! 2. *spacing* (without `--h`): h from the points of a few tiles spread over the cloud;
@@ -9,7 +11,8 @@
 //! 4. per tile: normals, the surface in the whole cloud's frame, the curvature at its own
 //!    points, appended to the tile's result file (the tile's input file is then removed);
 //! 5. *write*: the input is read again, and each point's attributes are written with the
-//!    next result of its tile, in input order.
+//!    next result of its tile, in input order, in any output format but E57
+//!    ([`mls_io::write_point_cloud_chunks`]): the file an in-memory run writes.
 //!
 //! With the file's normals and a given h the results are bitwise those of one in-memory run:
 //! a result depends only on the samples within the reach, all of them in the tile, and the
@@ -28,9 +31,9 @@ use anyhow::{Context, Result, bail};
 use mls_core::normals::{DEFAULT_SPACING_NEIGHBOURS, Orientation, suggest_h};
 use mls_core::tiling::{self, Grid, TilePlan};
 use mls_core::{Frame, IndexedCloud, Parallelism, Point, Vector};
-use mls_io::FileFormat;
+use mls_io::{FileFormat, PointStream};
 
-use files::{TileWriters, Workspace, for_each_chunk, open_reader};
+use files::{TileWriters, Workspace};
 pub use files::{available_memory, parse_size};
 use tile::{RESULT_BYTES, evaluate_tile, write_output};
 pub use tile::{TileResult, signs_agree, tile_curvature};
@@ -63,8 +66,14 @@ const SPACING_TILES: u64 = 8;
 #[derive(Debug)]
 pub struct TiledRun<'a> {
     pub input: &'a Path,
+    /// The input's format.
+    pub input_format: FileFormat,
+    /// The names of a text input's columns (`--columns`).
+    pub columns: Option<&'a mls_io::ColumnNames>,
     pub output: &'a Path,
     pub format: FileFormat,
+    /// PLY output in ASCII rather than binary.
+    pub ascii: bool,
     pub options: &'a CurvatureOptions,
     /// Memory budget in bytes.
     pub budget: u64,
@@ -195,8 +204,23 @@ pub fn curvature(run: &TiledRun<'_>, t: &mut Timings) -> Result<TiledSummary> {
     drop(Workspace::probe(&temp_parent(run))?);
     let s = &options.surface;
     let jet = (options.method == Method::Jet).then(|| evaluate::jet_config(false));
-    let reader = open_reader(run.input)?;
+    let options_in = mls_io::ReadOptions {
+        columns: run.columns.cloned(),
+    };
+    let reader = PointStream::open(run.input, run.input_format, &options_in)?;
     let n = reader.len();
+    if run.keep_attributes {
+        // As in memory, before any work: an attribute the output cannot hold.
+        let named = reader
+            .attributes()
+            .iter()
+            .map(|(name, ty)| mls_io::Attribute {
+                name: name.clone(),
+                data: mls_io::AttributeData::with_capacity(*ty, 0),
+            })
+            .collect();
+        pipeline::Carried::new(named, None, true).check(run.format, run.input)?;
+    }
     pipeline::check_count(usize::try_from(n).unwrap_or(usize::MAX), &name)?;
     let from_file = match (s.normals, reader.has_normals()) {
         (NormalsMode::File, false) => {
@@ -209,10 +233,8 @@ pub fn curvature(run: &TiledRun<'_>, t: &mut Timings) -> Result<TiledSummary> {
     for note in reader.notes() {
         eprintln!("mlscurv: note: {note}");
     }
-    let (header_lo, header_hi) = reader.header_bounds();
-    let template = reader.template().clone();
-    let record_in = reader.record_len() as u64;
-    drop(reader);
+    let (header_lo, header_hi) = reader.bounds();
+    let record_in = reader.record_len();
     let capacity = tile_capacity(
         run.budget,
         &format!("--memory {}", describe_size(run.budget)),
@@ -228,7 +250,7 @@ pub fn curvature(run: &TiledRun<'_>, t: &mut Timings) -> Result<TiledSummary> {
         Vector::repeat(f64::NEG_INFINITY),
     );
     t.time("scan", || {
-        for_each_chunk(run.input, false, u64::MAX, |_, chunk| {
+        reader.for_each_batch::<anyhow::Error>(false, u64::MAX, |_, chunk| {
             for p in &chunk.points {
                 let p = Point::from(*p);
                 counts[grid.index_of(&p)] += 1;
@@ -249,7 +271,7 @@ pub fn curvature(run: &TiledRun<'_>, t: &mut Timings) -> Result<TiledSummary> {
             factor: None,
         },
         None => t.time("spacing", || {
-            sampled_scale(run.input, &grid, &counts, capacity, s.h_factor, &name)
+            sampled_scale(&reader, &grid, &counts, capacity, s.h_factor, &name)
         })?,
     };
     let h = scale.h;
@@ -265,10 +287,18 @@ pub fn curvature(run: &TiledRun<'_>, t: &mut Timings) -> Result<TiledSummary> {
     // the results, and the output, written last.
     let out_dir = output_dir(run.output);
     let parent = temp_parent(run);
-    let record = if from_file { 56 } else { 32 };
+    // Estimated normals of E57 scans that all have a pose are oriented towards each point's
+    // own scanner, as in memory, unless --orient says otherwise: its position goes with the
+    // point (where file normals would).
+    let towards_scanners = !from_file && s.orient.is_none() && reader.scans_have_poses();
+    let record = if from_file || towards_scanners {
+        56
+    } else {
+        32
+    };
     let loaded: u64 = plan.tiles().iter().map(|t| t.loaded).sum();
     let results = n * (RESULT_BYTES as u64 + u64::from(!from_file));
-    let output = n * output_bytes(record_in, run.format);
+    let output = n * output_bytes(record_in, run.format, run.ascii);
     let free = |dir: &Path| {
         fs4::available_space(dir)
             .with_context(|| format!("{}: cannot measure the free disk space", dir.display()))
@@ -306,15 +336,25 @@ pub fn curvature(run: &TiledRun<'_>, t: &mut Timings) -> Result<TiledSummary> {
                 .map(|i| work.path(&format!("tile{i}.pts")))
                 .collect(),
         )?;
-        for_each_chunk(run.input, false, u64::MAX, |first, chunk| {
+        reader.for_each_batch::<anyhow::Error>(false, u64::MAX, |first, chunk| {
+            let viewpoints = if towards_scanners {
+                chunk.scans.as_ref().and_then(mls_io::Scans::viewpoints)
+            } else {
+                None
+            };
             for (k, p) in chunk.points.iter().enumerate() {
                 let mut bytes = [0u8; 56];
                 bytes[..8].copy_from_slice(&(first + k as u64).to_le_bytes());
                 for (i, c) in p.iter().enumerate() {
                     bytes[8 + 8 * i..16 + 8 * i].copy_from_slice(&c.to_le_bytes());
                 }
-                if let (true, Some(normals)) = (from_file, &chunk.normals) {
-                    for (i, c) in normals[k].iter().enumerate() {
+                let extra = match (&chunk.normals, &viewpoints) {
+                    (Some(normals), _) if from_file => Some(normals[k]),
+                    (_, Some(viewpoints)) => Some(viewpoints[k]),
+                    _ => None,
+                };
+                if let Some(extra) = extra {
+                    for (i, c) in extra.iter().enumerate() {
                         bytes[32 + 8 * i..40 + 8 * i].copy_from_slice(&c.to_le_bytes());
                     }
                 }
@@ -347,6 +387,7 @@ pub fn curvature(run: &TiledRun<'_>, t: &mut Timings) -> Result<TiledSummary> {
                 tile,
                 &plan,
                 from_file,
+                towards_scanners,
                 record as usize,
                 &scale,
                 orientation,
@@ -394,9 +435,15 @@ pub fn curvature(run: &TiledRun<'_>, t: &mut Timings) -> Result<TiledSummary> {
         k1_sd: Vec::new(),
         agreement: (!from_file).then_some((0, 0)),
     };
+    // The layout of LAS output: the LAS input's when its attributes are carried, else the
+    // one a whole table gets from its box, as in memory.
+    let template = match reader.las_template() {
+        Some(t) if run.keep_attributes => t.clone(),
+        _ => mls_io::LasTemplate::fitted(lo.into(), hi.into()),
+    };
     t.time("write", || {
         let batch = write_batch(run.budget, record_in);
-        write_output(run, &work, &plan, &template, batch, &mut summary)
+        write_output(run, &reader, &work, &plan, &template, batch, &mut summary)
     })?;
     drop(work);
     if let Some((agree, compared)) = summary.agreement
@@ -418,11 +465,14 @@ pub fn curvature(run: &TiledRun<'_>, t: &mut Timings) -> Result<TiledSummary> {
 
 /// Bytes a point of the output takes: the input's record (`record_in`), the computed columns as
 /// `f64` extra bytes and the status; LAZ compresses, to about half of that on LiDAR clouds
-/// (measured: 91 of 190 bytes).
-fn output_bytes(record_in: u64, format: FileFormat) -> u64 {
+/// (measured: 91 of 190 bytes); text (CSV, XYZ, ASCII PLY) writes an 8-byte float in up to
+/// 24 characters with its separator, about 20 on curvature output: 2.5 times the binary size.
+fn output_bytes(record_in: u64, format: FileFormat, ascii: bool) -> u64 {
     let record = record_in + 16 * 8 + 4;
     match format {
         FileFormat::Laz => record * 3 / 4,
+        FileFormat::Csv | FileFormat::Xyz => record * 5 / 2,
+        FileFormat::Ply if ascii => record * 5 / 2,
         _ => record,
     }
 }
@@ -448,7 +498,7 @@ fn same_file_system(a: &Path, b: &Path) -> bool {
 /// over the cloud (all of a cloud that small: then h is the in-memory run's), fewer if the
 /// budget's `capacity` holds fewer.
 fn sampled_scale(
-    input: &Path,
+    input: &PointStream,
     grid: &Grid,
     counts: &[u64],
     capacity: u64,
@@ -467,7 +517,7 @@ fn sampled_scale(
         .map(|i| (i * take) / tiles.len() != ((i + 1) * take) / tiles.len())
         .collect();
     let mut points = Vec::new();
-    for_each_chunk(input, false, u64::MAX, |_, chunk| {
+    input.for_each_batch::<anyhow::Error>(false, u64::MAX, |_, chunk| {
         for p in &chunk.points {
             let p = Point::from(*p);
             if chosen[plan.tile_of(&p)] {

@@ -7,9 +7,9 @@ use anyhow::{Context, Result};
 use mls_core::normals::Orientation;
 use mls_core::tiling::TilePlan;
 use mls_core::{Frame, Parallelism, Point, PointStatus, Vector};
-use mls_io::{Column, FileFormat};
+use mls_io::{Column, PlyFormat, PointStream};
 
-use super::files::{TileReaders, Workspace, for_each_chunk};
+use super::files::{TileReaders, Workspace};
 use super::{TiledRun, TiledSummary};
 use crate::evaluate::{self, CurvatureColumns};
 use crate::pipeline::{self, Scale};
@@ -71,7 +71,47 @@ pub fn tile_curvature(
     jet: Option<&mls_core::JetConfig>,
     name: &str,
 ) -> Result<TileResult> {
+    let orient = Orient::Rule(orientation);
+    tile_curvature_oriented(
+        points,
+        file_normals,
+        core,
+        h,
+        &orient,
+        frame,
+        options,
+        jet,
+        name,
+    )
+}
+
+/// How a tile's estimated normals are oriented.
+#[derive(Debug)]
+pub(super) enum Orient {
+    /// By a rule (`--orient`, or `up`).
+    Rule(Orientation),
+    /// Each towards its point's own scanner (E57 scans with poses, in memory the default).
+    Towards(Vec<Point>),
+}
+
+/// [`tile_curvature`], with estimated normals oriented as `orient` says.
+#[allow(clippy::too_many_arguments)]
+pub(super) fn tile_curvature_oriented(
+    points: &[Point],
+    file_normals: Option<Vec<[f64; 3]>>,
+    core: &[bool],
+    h: f64,
+    orient: &Orient,
+    frame: Frame,
+    options: &CurvatureOptions,
+    jet: Option<&mls_core::JetConfig>,
+    name: &str,
+) -> Result<TileResult> {
     let from_file = file_normals.is_some();
+    let (orientation, viewpoints) = match orient {
+        Orient::Rule(o) => (Some(*o), None),
+        Orient::Towards(v) => (None, Some(&v[..])),
+    };
     let s = &options.surface;
     let normals = pipeline::normals(
         file_normals,
@@ -82,8 +122,8 @@ pub fn tile_curvature(
         } else {
             NormalsMode::Estimate
         },
-        Some(orientation),
-        None,
+        orientation,
+        viewpoints,
         h,
         Parallelism::Rayon,
         name,
@@ -136,6 +176,7 @@ pub(super) fn evaluate_tile(
     tile: usize,
     plan: &TilePlan,
     from_file: bool,
+    towards_scanners: bool,
     record: usize,
     scale: &Scale,
     orientation: Orientation,
@@ -156,12 +197,20 @@ pub(super) fn evaluate_tile(
     let count = bytes.len() / record;
     let mut points = Vec::with_capacity(count);
     let mut file_normals = from_file.then(|| Vec::with_capacity(count));
+    let mut viewpoints = Vec::with_capacity(if towards_scanners { count } else { 0 });
     for r in bytes.chunks_exact(record) {
         points.push(Point::new(f64_at(r, 8), f64_at(r, 16), f64_at(r, 24)));
         if let Some(n) = &mut file_normals {
             n.push([f64_at(r, 32), f64_at(r, 40), f64_at(r, 48)]);
+        } else if towards_scanners {
+            viewpoints.push(Point::new(f64_at(r, 32), f64_at(r, 40), f64_at(r, 48)));
         }
     }
+    let orient = if towards_scanners {
+        Orient::Towards(viewpoints)
+    } else {
+        Orient::Rule(orientation)
+    };
     drop(bytes);
     let core: Vec<bool> = points.iter().map(|p| plan.tile_of(p) == tile).collect();
     let tile_name = format!("{name} (tile {tile})");
@@ -170,18 +219,18 @@ pub(super) fn evaluate_tile(
         codes,
         mut source,
         agreement,
-    } = tile_curvature(
+    } = tile_curvature_oriented(
         &points,
         file_normals,
         &core,
         scale.h,
-        orientation,
+        &orient,
         frame,
         options,
         jet,
         &tile_name,
     )?;
-    if !from_file && default_orientation {
+    if !from_file && default_orientation && !towards_scanners {
         source.push_str(" (a tiled run orients up unless --orient says otherwise)");
     }
     let path = work.path(&format!("tile{tile}.out"));
@@ -243,6 +292,7 @@ const SUMMARY_SAMPLE: u64 = 1 << 17;
 /// result.
 pub(super) fn write_output(
     run: &TiledRun<'_>,
+    input: &PointStream,
     work: &Workspace,
     plan: &TilePlan,
     template: &mls_io::LasTemplate,
@@ -263,97 +313,113 @@ pub(super) fn write_output(
     let stride = summary.points.div_ceil(SUMMARY_SAMPLE).max(1);
     let mut counts = vec![0u64; PointStatus::ALL.len() + 1];
     let mut renamed: Option<Vec<String>> = None;
-    let compressed = run.format == FileFormat::Laz;
-    mls_io::write_las_chunks(run.output, compressed, template, |sink| -> Result<()> {
-        for_each_chunk(run.input, run.keep_attributes, batch, |first, chunk| {
-            let m = chunk.points.len();
-            let mut out = CurvatureColumns::new(m, run.options);
-            for (k, p) in chunk.points.iter().enumerate() {
-                let p = Point::from(*p);
-                let own = plan.tile_of(&p);
-                let mut r = [0u8; RESULT_BYTES];
-                results.read_exact(own, &mut r)?;
-                let v = |j: usize| {
-                    f64::from_le_bytes(r[8 * j..8 * j + 8].try_into().unwrap_or_default())
-                };
-                out.normal[k] = [v(0), v(1), v(2)];
-                out.k1[k] = v(3);
-                out.k2[k] = v(4);
-                out.mean[k] = v(5);
-                out.gauss[k] = v(6);
-                out.d1[k] = [v(7), v(8), v(9)];
-                out.d2[k] = [v(10), v(11), v(12)];
-                if jet {
-                    out.k1_sd[k] = v(13);
-                    out.k2_sd[k] = v(14);
-                }
-                let status = i32::from_le_bytes(r[128..132].try_into().unwrap_or_default());
-                out.status[k] = status;
-                let slot = if status == 0 {
-                    0
-                } else {
-                    PointStatus::ALL
-                        .iter()
-                        .position(|s| i32::from(s.code()) == status)
-                        .map_or(0, |i| i + 1)
-                };
-                counts[slot] += 1;
-                if (first + k as u64).is_multiple_of(stride) {
-                    summary.k1.push(v(3));
-                    summary.k2.push(v(4));
-                    summary.mean.push(v(5));
-                    summary.gauss.push(v(6));
-                    summary.k1_sd.push(v(13));
-                }
-                if let (Some(halos), Some((agree, compared))) =
-                    (halos.as_mut(), summary.agreement.as_mut())
-                {
-                    let mine = r[132];
-                    let mut error = None;
-                    plan.tiles_near(&p, |t| {
-                        if t == own {
-                            return;
+    // As an in-memory run writes ([`crate::pipeline::Output::write`]).
+    let options = mls_io::WriteOptions {
+        ply_format: if run.ascii {
+            PlyFormat::Ascii
+        } else {
+            PlyFormat::BinaryLittleEndian
+        },
+        ply_quality: Some(crate::output::PLY_QUALITY),
+        las: Some(template),
+    };
+    let rows = summary.points;
+    mls_io::write_point_cloud_chunks(
+        run.output,
+        run.format,
+        &options,
+        rows,
+        |sink| -> Result<()> {
+            input.for_each_batch::<anyhow::Error>(run.keep_attributes, batch, |first, chunk| {
+                let m = chunk.points.len();
+                let mut out = CurvatureColumns::new(m, run.options);
+                for (k, p) in chunk.points.iter().enumerate() {
+                    let p = Point::from(*p);
+                    let own = plan.tile_of(&p);
+                    let mut r = [0u8; RESULT_BYTES];
+                    results.read_exact(own, &mut r)?;
+                    let v = |j: usize| {
+                        f64::from_le_bytes(r[8 * j..8 * j + 8].try_into().unwrap_or_default())
+                    };
+                    out.normal[k] = [v(0), v(1), v(2)];
+                    out.k1[k] = v(3);
+                    out.k2[k] = v(4);
+                    out.mean[k] = v(5);
+                    out.gauss[k] = v(6);
+                    out.d1[k] = [v(7), v(8), v(9)];
+                    out.d2[k] = [v(10), v(11), v(12)];
+                    if jet {
+                        out.k1_sd[k] = v(13);
+                        out.k2_sd[k] = v(14);
+                    }
+                    let status = i32::from_le_bytes(r[128..132].try_into().unwrap_or_default());
+                    out.status[k] = status;
+                    let slot = if status == 0 {
+                        0
+                    } else {
+                        PointStatus::ALL
+                            .iter()
+                            .position(|s| i32::from(s.code()) == status)
+                            .map_or(0, |i| i + 1)
+                    };
+                    counts[slot] += 1;
+                    if (first + k as u64).is_multiple_of(stride) {
+                        summary.k1.push(v(3));
+                        summary.k2.push(v(4));
+                        summary.mean.push(v(5));
+                        summary.gauss.push(v(6));
+                        summary.k1_sd.push(v(13));
+                    }
+                    if let (Some(halos), Some((agree, compared))) =
+                        (halos.as_mut(), summary.agreement.as_mut())
+                    {
+                        let mine = r[132];
+                        let mut error = None;
+                        plan.tiles_near(&p, |t| {
+                            if t == own {
+                                return;
+                            }
+                            let mut b = [0u8];
+                            if let Err(e) = halos.read_exact(t, &mut b) {
+                                error = error.take().or(Some(e));
+                            }
+                            if let Some(same) = signs_agree(mine, b[0]) {
+                                *compared += 1;
+                                *agree += u64::from(same);
+                            }
+                        });
+                        if let Some(e) = error {
+                            return Err(e);
                         }
-                        let mut b = [0u8];
-                        if let Err(e) = halos.read_exact(t, &mut b) {
-                            error = error.take().or(Some(e));
-                        }
-                        if let Some(same) = signs_agree(mine, b[0]) {
-                            *compared += 1;
-                            *agree += u64::from(same);
-                        }
-                    });
-                    if let Some(e) = error {
-                        return Err(e);
                     }
                 }
-            }
-            let positions = &chunk.points;
-            let columns = out.columns(positions);
-            // Moved, not copied: the chunk is this call's (empty without attributes).
-            let mut attributes = chunk.attributes;
-            // The same names as an in-memory run gives them (`k1` → `k1_in`), noted once.
-            let names = renamed.get_or_insert_with(|| {
-                let named = attributes
-                    .iter()
-                    .map(|a| mls_io::Attribute {
-                        name: a.name.clone(),
-                        data: mls_io::AttributeData::with_capacity(a.data.ty(), 0),
-                    })
-                    .collect();
-                let mut carried = pipeline::Carried::new(named, None, true);
-                carried.rename_clashes(&columns, run.input);
-                carried.attributes.into_iter().map(|a| a.name).collect()
-            });
-            for (a, name) in attributes.iter_mut().zip(names.iter()) {
-                a.name.clone_from(name);
-            }
-            let carried = pipeline::Carried::new(attributes, None, true);
-            let columns: Vec<Column<'_>> = carried.insert(columns, 6);
-            sink.write(&columns)?;
-            Ok(())
-        })
-    })?;
+                let positions = &chunk.points;
+                let columns = out.columns(positions);
+                // Moved, not copied: the chunk is this call's (empty without attributes).
+                let mut attributes = chunk.attributes;
+                // The same names as an in-memory run gives them (`k1` → `k1_in`), noted once.
+                let names = renamed.get_or_insert_with(|| {
+                    let named = attributes
+                        .iter()
+                        .map(|a| mls_io::Attribute {
+                            name: a.name.clone(),
+                            data: mls_io::AttributeData::with_capacity(a.data.ty(), 0),
+                        })
+                        .collect();
+                    let mut carried = pipeline::Carried::new(named, None, true);
+                    carried.rename_clashes(&columns, run.input);
+                    carried.attributes.into_iter().map(|a| a.name).collect()
+                });
+                for (a, name) in attributes.iter_mut().zip(names.iter()) {
+                    a.name.clone_from(name);
+                }
+                let carried = pipeline::Carried::new(attributes, None, true);
+                let columns: Vec<Column<'_>> = carried.insert(columns, 6);
+                sink.write(&columns)?;
+                Ok(())
+            })
+        },
+    )?;
     summary.status = status_text(&counts);
     Ok(())
 }

@@ -26,4 +26,5 @@ mod render;
 mod sphere;
 mod streams;
 mod tiled;
+mod tiled_formats;
 mod up_front;

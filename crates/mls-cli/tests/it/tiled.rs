@@ -11,7 +11,7 @@ use crate::common::{listing, mlscurv, printed_agreement, run, run_ok};
 
 /// A budget that splits a few tens of thousands of points into tens of tiles: 64 MiB is the
 /// fixed part and about 5,200 loaded points.
-const SMALL_BUDGET: &str = "66MiB";
+pub const SMALL_BUDGET: &str = "66MiB";
 
 /// Rolling terrain, `n` points uniformly at random over `side` × `side` metres far from the
 /// origin, with exact normals and an intensity, written as LAS by mls-io.
@@ -21,6 +21,32 @@ fn write_terrain(path: &Path, n: usize, side: f64, seed: u64) {
 
 /// [`write_terrain`] with every `flip`-th normal pointing down.
 fn write_terrain_flipped(path: &Path, n: usize, side: f64, seed: u64, flip: usize) {
+    let (points, normals, intensity) = terrain(n, side, seed, flip);
+    let intensity = Attribute {
+        name: "intensity".into(),
+        data: AttributeData::U16(intensity),
+    };
+    let columns = [
+        Column::component("x", &points, Axis::X),
+        Column::component("y", &points, Axis::Y),
+        Column::component("z", &points, Axis::Z),
+        Column::component("nx", &normals, Axis::X),
+        Column::component("ny", &normals, Axis::Y),
+        Column::component("nz", &normals, Axis::Z),
+        Column::attribute(&intensity),
+    ];
+    mls_io::write_point_cloud_as(path, FileFormat::Las, &columns, mls_io::PlyFormat::Ascii)
+        .unwrap();
+}
+
+/// Rolling terrain, `n` points uniformly at random over `side` × `side` metres far from the
+/// origin: the points, their exact normals (every `flip`-th pointing down) and an intensity.
+pub fn terrain(
+    n: usize,
+    side: f64,
+    seed: u64,
+    flip: usize,
+) -> (Vec<[f64; 3]>, Vec<[f64; 3]>, Vec<u16>) {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let (mut points, mut normals, mut intensity) = (Vec::new(), Vec::new(), Vec::new());
     for _ in 0..n {
@@ -40,25 +66,11 @@ fn write_terrain_flipped(path: &Path, n: usize, side: f64, seed: u64, flip: usiz
         normals.push([-fx / norm, -fy / norm, 1.0 / norm].map(|c| sign * c));
         intensity.push(rng.random_range(0..4096u16));
     }
-    let intensity = Attribute {
-        name: "intensity".into(),
-        data: AttributeData::U16(intensity),
-    };
-    let columns = [
-        Column::component("x", &points, Axis::X),
-        Column::component("y", &points, Axis::Y),
-        Column::component("z", &points, Axis::Z),
-        Column::component("nx", &normals, Axis::X),
-        Column::component("ny", &normals, Axis::Y),
-        Column::component("nz", &normals, Axis::Z),
-        Column::attribute(&intensity),
-    ];
-    mls_io::write_point_cloud_as(path, FileFormat::Las, &columns, mls_io::PlyFormat::Ascii)
-        .unwrap();
+    (points, normals, intensity)
 }
 
 /// The number of tiles the summary reports.
-fn tiles(stderr: &str) -> usize {
+pub fn tiles(stderr: &str) -> usize {
     let line = stderr
         .lines()
         .find(|l| l.trim_start().starts_with("tiles"))
@@ -68,14 +80,14 @@ fn tiles(stderr: &str) -> usize {
 
 /// The two files hold the same bytes.
 #[track_caller]
-fn assert_same_bytes(a: &Path, b: &Path) {
+pub fn assert_same_bytes(a: &Path, b: &Path) {
     let (a, b) = (std::fs::read(a).unwrap(), std::fs::read(b).unwrap());
     assert_eq!(a.len(), b.len(), "file sizes differ");
     let first = a.iter().zip(&b).position(|(x, y)| x != y);
     assert_eq!(first, None, "files differ from byte {first:?}");
 }
 
-fn curvature(input: &Path, output: &Path, extra: &[&str]) -> crate::common::Run {
+pub fn curvature(input: &Path, output: &Path, extra: &[&str]) -> crate::common::Run {
     run_ok(
         mlscurv()
             // The LAS header's creation date fixed, so that runs either side of midnight
@@ -294,14 +306,13 @@ fn a_budget_too_small_or_an_output_that_cannot_stream_is_a_clear_error() {
     let r = run(mlscurv()
         .arg("curvature")
         .arg(&input)
-        .arg("-o")
-        .arg(dir.path().join("out.csv"))
+        .args(["-o", "-", "--output-format", "csv"])
         .args(["--memory", "65MiB"]));
     assert_eq!(r.code, Some(1), "{}", r.stderr);
     assert!(
         r.stderr.contains(
             "5000 points do not fit in 65 MiB of memory and are evaluated in tiles, whose \
-             output must be a .las or .laz file"
+             output must be a file"
         ),
         "{}",
         r.stderr

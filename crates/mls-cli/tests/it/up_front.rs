@@ -1,5 +1,6 @@
-//! What is refused before any work: a `--memory` budget that an input read whole would
-//! exceed, and an output (or a tiled run's temporary directory) that cannot be written. Each
+//! What is decided before any work: whether `--memory` holds an input (else it is tiled; on
+//! standard input, read whole, `--memory` is refused), and an output (or a tiled run's
+//! temporary directory) that cannot be written, refused. Each
 //! test gives an input whose reading would fail, so that an error naming the output, not the
 //! input, shows that the output was checked first.
 
@@ -31,7 +32,7 @@ fn estimate_mib(points: u64) -> f64 {
 }
 
 #[test]
-fn memory_for_an_input_read_whole_is_refused_when_exceeded_and_stated_when_met() {
+fn memory_is_checked_before_any_work_tiling_what_exceeds_it() {
     let dir = tempfile::tempdir().unwrap();
     let ply = dir.path().join("sphere.ply");
     let xyz = dir.path().join("sphere.xyz");
@@ -42,21 +43,25 @@ fn memory_for_an_input_read_whole_is_refused_when_exceeded_and_stated_when_met()
     assert_eq!(need, "71.6 MiB");
     for input in [&ply, &xyz] {
         let output = dir.path().join("out.ply");
-        let r = run(mlscurv()
-            .arg("curvature")
-            .arg(input)
-            .arg("-o")
-            .arg(&output)
-            .args(["--h", "0.05", "--memory", "70MiB"]));
-        assert_one_line_error(
-            &r,
-            &input.display().to_string(),
-            &[
-                "--memory 70 MiB: its 20000 points need about 71.6 MiB in memory",
-                "only LAS and LAZ files are evaluated in tiles",
-            ],
+        let r = run_ok(
+            mlscurv()
+                .arg("curvature")
+                .arg(input)
+                .arg("-o")
+                .arg(&output)
+                .args(["--h", "0.05", "--memory", "70MiB"]),
         );
-        assert!(!output.exists());
+        assert!(
+            r.stderr.contains(&format!(
+                "{}: 20000 points need about 71.6 MiB, more than 70 MiB (--memory): evaluating \
+                 in tiles",
+                input.display()
+            )),
+            "{}",
+            r.stderr
+        );
+        assert!(r.stderr.contains("  tiles           "), "{}", r.stderr);
+        std::fs::remove_file(&output).unwrap();
         let r = run_ok(
             mlscurv()
                 .arg("curvature")

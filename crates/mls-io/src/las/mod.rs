@@ -78,6 +78,28 @@ pub struct LasTemplate {
 }
 
 impl LasTemplate {
+    /// The layout [`write_las`](crate::write_las) chooses for a table without a template
+    /// whose coordinates span the box `min`–`max` (finite): point format 6, the box's minimum
+    /// as offset and the scale of its largest extent (see the module's documentation). For
+    /// writing such a table in chunks ([`write_point_cloud_chunks`](crate::write_point_cloud_chunks)),
+    /// whose box is known before its rows.
+    pub fn fitted(min: [f64; 3], max: [f64; 3]) -> Self {
+        let extent = (0..3).map(|i| max[i] - min[i]).fold(0.0, f64::max);
+        let scale = write::coordinate_scale(extent);
+        let builder = las::Builder::from(las::Version::new(1, 4));
+        Self {
+            point_format: 6,
+            scale: [scale; 3],
+            offset: min,
+            gps_time_type: builder.gps_time_type,
+            file_source_id: builder.file_source_id,
+            has_wkt_crs: builder.has_wkt_crs,
+            descriptors: Vec::new(),
+            vlrs: Vec::new(),
+            evlrs: Vec::new(),
+        }
+    }
+
     fn from_header(
         header: &las::Header,
         point_format: u8,

@@ -215,7 +215,7 @@ fn fitted_transforms(
 }
 
 /// The power of ten between 1e-8 and 1e-7 of `extent` (see the module documentation).
-fn coordinate_scale(extent: f64) -> f64 {
+pub(super) fn coordinate_scale(extent: f64) -> f64 {
     if extent > 0.0 && extent.is_finite() {
         10f64.powi(extent.log10().floor() as i32 - 7)
     } else {

@@ -2,10 +2,10 @@
 
 use std::io::{self, BufRead, Read};
 
+use super::Target;
 use super::header::{Element, Encoding, Property, PropertyKind, ScalarType, describe, io_error};
-use super::{Target, attribute_columns, capacity};
+use crate::Batches;
 use crate::error::ReadError;
-use crate::{CloudBuilder, PointCloud};
 
 /// Reads `buf.len()` bytes unless the input ends first; returns how many were read, so a
 /// truncation can be pinned to the property it cuts.
@@ -191,29 +191,28 @@ impl<R: BufRead> BinaryBody<'_, R> {
         self.truncated(offset, field)
     }
 
-    pub(super) fn read_vertices(
-        &mut self,
-        vertex: &Element,
-        targets: &[Target],
-        has_normals: bool,
-        remaining: Option<u64>,
-    ) -> Result<PointCloud, ReadError> {
-        let min_record = vertex
+    /// The fewest bytes a vertex can take (a list property at least its length).
+    pub(super) fn min_record(&self, vertex: &Element) -> u64 {
+        vertex
             .properties
             .iter()
             .map(|p| match p.kind {
                 PropertyKind::Scalar(ty) => ty.size(),
                 PropertyKind::List { count, .. } => count.size(),
             })
-            .sum();
-        let capacity = capacity(vertex.count, min_record, remaining);
-        let mut cloud = CloudBuilder::new(has_normals, capacity);
-        cloud.attributes = attribute_columns(vertex, targets, capacity);
+            .sum()
+    }
+
+    pub(super) fn read_vertices<E: From<ReadError>>(
+        &mut self,
+        vertex: &Element,
+        targets: &[Target],
+        batches: &mut Batches<'_, E>,
+    ) -> Result<(), E> {
         match vertex.fixed_size() {
-            Some(size) => self.read_fixed_vertices(vertex, size, targets, &mut cloud)?,
-            None => self.read_variable_vertices(vertex, targets, &mut cloud)?,
+            Some(size) => self.read_fixed_vertices(vertex, size, targets, batches),
+            None => self.read_variable_vertices(vertex, targets, batches),
         }
-        Ok(cloud.finish())
     }
 
     fn non_finite(&self, offset: u64, field: String, value: f64) -> ReadError {
@@ -227,17 +226,17 @@ impl<R: BufRead> BinaryBody<'_, R> {
 
     /// The fast path: every vertex is a record of `size` bytes, read whole and decoded at
     /// offsets planned once.
-    fn read_fixed_vertices(
+    fn read_fixed_vertices<E: From<ReadError>>(
         &mut self,
         vertex: &Element,
         size: u64,
         targets: &[Target],
-        cloud: &mut CloudBuilder,
-    ) -> Result<(), ReadError> {
+        batches: &mut Batches<'_, E>,
+    ) -> Result<(), E> {
         // (offset in record, type, slot, property) for the coordinates and normals, and
         // (offset in record, attribute) for the attributes.
         let mut plan = Vec::with_capacity(6);
-        let mut attributes = Vec::with_capacity(cloud.attributes.len());
+        let mut attributes = Vec::with_capacity(batches.cloud().attributes.len());
         let mut at = 0;
         for (property, target) in vertex.properties.iter().zip(targets) {
             if let PropertyKind::Scalar(ty) = property.kind {
@@ -254,7 +253,9 @@ impl<R: BufRead> BinaryBody<'_, R> {
         for index in 0..vertex.count {
             let read = read_full(&mut self.reader, &mut record).map_err(io_error(self.file))?;
             if read < record.len() {
-                return Err(self.truncated_record(vertex, index, size, read as u64));
+                return Err(self
+                    .truncated_record(vertex, index, size, read as u64)
+                    .into());
             }
             let mut values = [0.0; 6];
             for &(at, ty, slot, property) in &plan {
@@ -265,15 +266,16 @@ impl<R: BufRead> BinaryBody<'_, R> {
                 let field = || describe(vertex, index, property, ty.name());
                 let offset = self.offset.saturating_add(at);
                 let Some(value) = ty.decode(bytes, self.encoding) else {
-                    return Err(self.truncated(offset, field()));
+                    return Err(self.truncated(offset, field()).into());
                 };
                 if !value.is_finite() {
-                    return Err(self.non_finite(offset, field(), value));
+                    return Err(self.non_finite(offset, field(), value).into());
                 }
                 if let Some(dst) = values.get_mut(slot) {
                     *dst = value;
                 }
             }
+            let cloud = batches.cloud();
             for &(at, i) in &attributes {
                 let bytes = at.and_then(|at| record.get(at..)).unwrap_or_default();
                 if let Some(a) = cloud.attributes.get_mut(i) {
@@ -281,19 +283,19 @@ impl<R: BufRead> BinaryBody<'_, R> {
                     a.data.push_bytes(bytes, big_endian);
                 }
             }
-            cloud.push(values);
             self.offset = self.offset.saturating_add(size);
+            batches.push(values)?;
         }
         Ok(())
     }
 
     /// The general path for vertices with list properties: one property at a time.
-    fn read_variable_vertices(
+    fn read_variable_vertices<E: From<ReadError>>(
         &mut self,
         vertex: &Element,
         targets: &[Target],
-        cloud: &mut CloudBuilder,
-    ) -> Result<(), ReadError> {
+        batches: &mut Batches<'_, E>,
+    ) -> Result<(), E> {
         let big_endian = self.encoding == Encoding::BigEndian;
         for index in 0..vertex.count {
             let mut values = [0.0; 6];
@@ -307,14 +309,14 @@ impl<R: BufRead> BinaryBody<'_, R> {
                             Target::Slot(slot) => {
                                 let value = ty.decode(&raw, self.encoding).unwrap_or(f64::NAN);
                                 if !value.is_finite() {
-                                    return Err(self.non_finite(offset, field(), value));
+                                    return Err(self.non_finite(offset, field(), value).into());
                                 }
                                 if let Some(dst) = values.get_mut(slot) {
                                     *dst = value;
                                 }
                             }
                             Target::Attribute(i) => {
-                                if let Some(a) = cloud.attributes.get_mut(i) {
+                                if let Some(a) = batches.cloud().attributes.get_mut(i) {
                                     a.data.push_bytes(&raw, big_endian);
                                 }
                             }
@@ -326,7 +328,7 @@ impl<R: BufRead> BinaryBody<'_, R> {
                     }
                 }
             }
-            cloud.push(values);
+            batches.push(values)?;
         }
         Ok(())
     }

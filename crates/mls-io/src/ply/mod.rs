@@ -34,11 +34,24 @@ enum Target {
 /// Reads a PLY stream; `size_hint` is the total file size when known, to bound preallocation;
 /// `slots` are the leading [`SLOT_NAMES`] read as geometry (the rest become attributes).
 pub(crate) fn read(
-    mut reader: impl BufRead,
+    reader: impl BufRead,
     file: &str,
     size_hint: Option<u64>,
     slots: &[&str],
 ) -> Result<ReadOutcome, ReadError> {
+    crate::one_batch(|sink| read_batches(reader, file, size_hint, slots, u64::MAX, sink))
+}
+
+/// Reads a PLY stream as [`read`] does, handing the vertices to `sink` in clouds of at most
+/// `max` points, in file order (an empty one for a file without vertices); returns the notes.
+pub(crate) fn read_batches<E: From<ReadError>>(
+    mut reader: impl BufRead,
+    file: &str,
+    size_hint: Option<u64>,
+    slots: &[&str],
+    max: u64,
+    sink: &mut dyn FnMut(PointCloud) -> Result<(), E>,
+) -> Result<Vec<String>, E> {
     let header = parse_header(&mut reader, file)?;
     let (vertex_index, targets, notes) = vertex_layout(&header, file, slots)?;
     let has_normals = targets.contains(&Target::Slot(3));
@@ -54,10 +67,15 @@ pub(crate) fn read(
                 skip_ascii_element(&mut lines, file, element)?;
             }
             let Some(vertex) = elements.next() else {
-                return Err(no_vertex_element(file, &header));
+                return Err(no_vertex_element(file, &header).into());
             };
-            read_ascii_vertices(&mut lines, file, vertex, &targets, has_normals, remaining)
-                .map(|cloud| ReadOutcome { cloud, notes })
+            // An ASCII vertex takes at least two bytes per property (a digit and a separator).
+            let min_record = 2 * vertex.properties.len() as u64;
+            let capacity = capacity(vertex.count.min(max), min_record, remaining);
+            let fresh = batch_builder(vertex, &targets, has_normals, capacity);
+            let mut batches = crate::Batches::new(max, fresh, sink);
+            read_ascii_vertices(&mut lines, file, vertex, &targets, &mut batches)?;
+            batches.finish()?;
         }
         Encoding::LittleEndian | Encoding::BigEndian => {
             let mut body = BinaryBody {
@@ -70,12 +88,30 @@ pub(crate) fn read(
                 body.skip_element(element)?;
             }
             let Some(vertex) = elements.next() else {
-                return Err(no_vertex_element(file, &header));
+                return Err(no_vertex_element(file, &header).into());
             };
-            body.read_vertices(vertex, &targets, has_normals, remaining)
-                .map(|cloud| ReadOutcome { cloud, notes })
+            let capacity = capacity(vertex.count.min(max), body.min_record(vertex), remaining);
+            let fresh = batch_builder(vertex, &targets, has_normals, capacity);
+            let mut batches = crate::Batches::new(max, fresh, sink);
+            body.read_vertices(vertex, &targets, &mut batches)?;
+            batches.finish()?;
         }
     }
+    Ok(notes)
+}
+
+/// A new, empty batch of vertices with room for `capacity`.
+fn batch_builder<'a>(
+    vertex: &'a Element,
+    targets: &'a [Target],
+    has_normals: bool,
+    capacity: usize,
+) -> Box<dyn Fn() -> CloudBuilder + 'a> {
+    Box::new(move || {
+        let mut cloud = CloudBuilder::new(has_normals, capacity);
+        cloud.attributes = attribute_columns(vertex, targets, capacity);
+        cloud
+    })
 }
 
 /// The number of vertices a PLY header declares, read from the header alone.
@@ -252,22 +288,17 @@ fn ascii_eof<R: BufRead>(lines: &Lines<R>, file: &str, element: &Element, index:
     }
 }
 
-fn read_ascii_vertices<R: BufRead>(
+fn read_ascii_vertices<R: BufRead, E: From<ReadError>>(
     lines: &mut Lines<R>,
     file: &str,
     vertex: &Element,
     targets: &[Target],
-    has_normals: bool,
-    remaining: Option<u64>,
-) -> Result<PointCloud, ReadError> {
-    // An ASCII vertex takes at least two bytes per property (a digit and a separator).
-    let min_record = 2 * vertex.properties.len() as u64;
-    let capacity = capacity(vertex.count, min_record, remaining);
-    let mut cloud = CloudBuilder::new(has_normals, capacity);
-    cloud.attributes = attribute_columns(vertex, targets, capacity);
+    batches: &mut crate::Batches<'_, E>,
+) -> Result<(), E> {
     for index in 0..vertex.count {
+        let cloud = batches.cloud();
         let Some((line, text)) = lines.next_line(file)? else {
-            return Err(ascii_eof(lines, file, vertex, index));
+            return Err(ascii_eof(lines, file, vertex, index).into());
         };
         let error = |property: &Property, message: String| ReadError::Ascii {
             file: file.to_owned(),
@@ -279,7 +310,7 @@ fn read_ascii_vertices<R: BufRead>(
         let mut values = [0.0; 6];
         for (property, target) in vertex.properties.iter().zip(targets) {
             let Some(token) = tokens.next() else {
-                return Err(error(property, "missing value (row too short)".to_owned()));
+                return Err(error(property, "missing value (row too short)".to_owned()).into());
             };
             match property.kind {
                 PropertyKind::Scalar(ty) => match *target {
@@ -294,7 +325,8 @@ fn read_ascii_vertices<R: BufRead>(
                                         quoted(token),
                                         ty.name()
                                     ),
-                                ));
+                                )
+                                .into());
                             }
                             *value = v;
                         }
@@ -315,7 +347,8 @@ fn read_ascii_vertices<R: BufRead>(
                             return Err(error(
                                 property,
                                 format!("list of {length} values ends after {item}"),
-                            ));
+                            )
+                            .into());
                         }
                     }
                 }
@@ -331,11 +364,12 @@ fn read_ascii_vertices<R: BufRead>(
                     quoted(extra),
                     vertex.properties.len()
                 ),
-            });
+            }
+            .into());
         }
-        cloud.push(values);
+        batches.push(values)?;
     }
-    Ok(cloud.finish())
+    Ok(())
 }
 
 #[cfg(test)]

@@ -3,7 +3,7 @@
 use std::borrow::Cow;
 use std::io::BufRead;
 
-use super::TextAttributes;
+use super::{Pass, TextAttributes, TextSchema, hand_on};
 use crate::attributes::usable_name;
 use crate::columns::ReadOptions;
 use crate::error::{ReadError, quoted};
@@ -61,13 +61,30 @@ pub(crate) fn read_csv_slots(
     options: &ReadOptions,
     slots: &[&str],
 ) -> Result<ReadOutcome, ReadError> {
+    let (cloud, schema) = csv_pass(reader, name, options, slots, &mut Pass::Whole)?;
+    Ok(ReadOutcome {
+        cloud,
+        notes: schema.notes,
+    })
+}
+
+/// One pass over a CSV file ([`read_csv_slots`]) as `pass` says: the cloud (empty unless
+/// [`Pass::Whole`]) and what was learnt of its columns.
+pub(crate) fn csv_pass<E: From<ReadError>>(
+    reader: impl BufRead,
+    name: &str,
+    options: &ReadOptions,
+    slots: &[&str],
+    pass: &mut Pass<'_, E>,
+) -> Result<(PointCloud, TextSchema), E> {
     let mut lines = Lines::new(reader, 0);
     let Some((header_line, header)) = lines.next_line(name)? else {
         return Err(ReadError::Header {
             file: name.to_owned(),
             line: 1,
             message: "empty file; expected a header row naming the columns x, y, z".to_owned(),
-        });
+        }
+        .into());
     };
     let header_error = |message: String| ReadError::Header {
         file: name.to_owned(),
@@ -101,7 +118,8 @@ pub(crate) fn read_csv_slots(
                 found: names.len(),
                 named: columns.to_string(),
                 by: "--columns".to_owned(),
-            });
+            }
+            .into());
         }
         names = columns.names().to_vec();
     }
@@ -110,7 +128,7 @@ pub(crate) fn read_csv_slots(
     let mut targets = vec![None; width];
     // For each column not in a slot, the attribute it fills, if any.
     let mut attribute_of = vec![None; width];
-    let mut attributes = TextAttributes::default();
+    let mut attributes = TextAttributes::new(pass);
     let mut taken = std::collections::HashSet::new();
     let mut present = [false; 6];
     for (column, column_name) in names.iter().enumerate() {
@@ -128,10 +146,9 @@ pub(crate) fn read_csv_slots(
         };
         if let Some(flag) = present.get_mut(slot) {
             if *flag {
-                return Err(header_error(format!(
-                    "duplicate column {}",
-                    quoted(&lowercase)
-                )));
+                return Err(
+                    header_error(format!("duplicate column {}", quoted(&lowercase))).into(),
+                );
             }
             *flag = true;
         }
@@ -146,13 +163,15 @@ pub(crate) fn read_csv_slots(
                 file: name.to_owned(),
                 line: header_line,
                 field,
-            });
+            }
+            .into());
         }
     }
     check_normals(name, header_line, [nx, ny, nz])?;
 
     let mut cloud = CloudBuilder::new(nx, 0);
     let mut first_row = true;
+    let mut last_line = 0;
     while let Some((line, text)) = lines.next_line(name)? {
         // CloudCompare's export can put the point count on the line after the header.
         if std::mem::replace(&mut first_row, false)
@@ -174,7 +193,7 @@ pub(crate) fn read_csv_slots(
             })?;
             let Some(&Some(slot)) = targets.get(column - 1) else {
                 if let Some(&Some(i)) = attribute_of.get(column - 1) {
-                    attributes.push(i, line, field.trim());
+                    attributes.push(i, name, line, field.trim())?;
                 }
                 continue;
             };
@@ -197,14 +216,42 @@ pub(crate) fn read_csv_slots(
                 line,
                 found,
                 expected: width,
-            });
+            }
+            .into());
         }
-        cloud.push(values);
+        last_line = line;
+        match pass {
+            Pass::Whole => cloud.push(values),
+            Pass::Profile => {}
+            Pass::Batches { max, .. } => {
+                cloud.push(values);
+                if cloud.points.len() as u64 >= *max {
+                    hand_on(&mut cloud, None, &mut attributes, pass, name, line)?;
+                }
+            }
+        }
+    }
+    if let Pass::Batches { handed, .. } = pass
+        && (!*handed || !cloud.points.is_empty())
+    {
+        hand_on(&mut cloud, None, &mut attributes, pass, name, last_line)?;
     }
     let mut notes = Vec::new();
     let mut cloud = cloud.finish();
-    cloud.attributes = attributes.finish(name, |_| false, &mut notes);
-    Ok(ReadOutcome { cloud, notes })
+    let (kept, columns) = attributes.finish(name, |_| false, &mut notes);
+    if matches!(pass, Pass::Whole) {
+        cloud.attributes = kept;
+    }
+    let schema = match pass.schema() {
+        Some(schema) => schema.clone(),
+        None => TextSchema {
+            columns,
+            normals: false,
+            notes,
+            csv: true,
+        },
+    };
+    Ok((cloud, schema))
 }
 
 /// The fields of one CSV line, unquoted. Yields an error message for a malformed quoted field

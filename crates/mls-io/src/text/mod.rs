@@ -3,7 +3,7 @@
 
 use std::io::BufRead;
 
-use crate::attributes::{Attribute, TextColumn};
+use crate::attributes::{Attribute, AttributeData, TextColumn, TextColumnType};
 use crate::columns::{ColumnNames, ReadOptions, UNIT_TOLERANCE};
 use crate::error::{ReadError, quoted};
 use crate::lines::{Lines, parse_finite};
@@ -34,53 +34,189 @@ enum Role {
     Skip,
 }
 
-/// The attribute columns of a text file, by name, on their way to [`Attribute`]s.
-#[derive(Debug, Default)]
-struct TextAttributes(Vec<(String, usize, TextColumn)>);
+/// What a pass over a text file does with its rows.
+pub(crate) enum Pass<'s, E> {
+    /// Keeps every row: a whole read.
+    Whole,
+    /// Keeps none: learns what each column is ([`TextSchema`]).
+    Profile,
+    /// Hands the rows on in clouds of at most `max` points, reading each column as the first
+    /// pass's `schema` says.
+    Batches {
+        schema: &'s TextSchema,
+        max: u64,
+        sink: &'s mut dyn FnMut(PointCloud) -> Result<(), E>,
+        handed: bool,
+    },
+}
 
-impl TextAttributes {
-    /// Adds a column for file column `column` (1-based); returns its index.
-    fn add(&mut self, name: String, column: usize) -> usize {
-        self.0.push((name, column, TextColumn::new()));
-        self.0.len() - 1
+impl<E> Pass<'_, E> {
+    fn schema(&self) -> Option<&TextSchema> {
+        match self {
+            Self::Batches { schema, .. } => Some(schema),
+            _ => None,
+        }
     }
+}
 
-    fn push(&mut self, i: usize, line: usize, token: &str) {
-        if let Some((_, _, c)) = self.0.get_mut(i) {
-            c.push(line, token);
+/// What a first pass over a text file learns, which depends on every row: each attribute
+/// column's type (in the order the reader meets them; `None` for one dropped, or taken as
+/// normals), whether columns 4–6 of a headerless file are normals, and the reader's notes.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub(crate) struct TextSchema {
+    columns: Vec<Option<TextColumnType>>,
+    normals: bool,
+    notes: Vec<String>,
+    /// Whether the file is CSV (a header row), not headerless XYZ.
+    csv: bool,
+}
+
+/// One attribute column's values.
+#[derive(Debug)]
+enum Values {
+    /// Of a type still to learn.
+    Learn(TextColumn),
+    /// Of the type a first pass learnt.
+    Typed(TextColumnType, AttributeData),
+    /// Not read: dropped, or taken as normals, by the first pass.
+    Skip,
+}
+
+/// The attribute columns of a text file, by name, on their way to [`Attribute`]s.
+#[derive(Debug)]
+struct TextAttributes<'s> {
+    columns: Vec<(String, usize, Values)>,
+    /// Whether learning columns keep their values.
+    keep: bool,
+    /// The types a first pass learnt, for a pass in batches.
+    schema: Option<&'s TextSchema>,
+}
+
+impl<'s> TextAttributes<'s> {
+    fn new<E>(pass: &Pass<'s, E>) -> Self {
+        Self {
+            columns: Vec::new(),
+            keep: matches!(pass, Pass::Whole),
+            schema: match pass {
+                Pass::Batches { schema, .. } => Some(*schema),
+                _ => None,
+            },
         }
     }
 
-    /// The attributes, in column order, except those `skip` says; a column that holds
-    /// something other than numbers is dropped with a note.
-    fn finish(
-        self,
-        file: &str,
-        skip: impl Fn(usize) -> bool,
-        notes: &mut Vec<String>,
-    ) -> Vec<Attribute> {
-        let mut attributes = Vec::with_capacity(self.0.len());
-        for (i, (name, column, values)) in self.0.into_iter().enumerate() {
-            if skip(i) {
-                continue;
+    /// Adds a column for file column `column` (1-based); returns its index.
+    fn add(&mut self, name: String, column: usize) -> usize {
+        let i = self.columns.len();
+        let values = match self.schema {
+            Some(schema) => match schema.columns.get(i).copied().flatten() {
+                Some(t) => Values::Typed(t, AttributeData::with_capacity(t.ty, 0)),
+                None => Values::Skip,
+            },
+            None => Values::Learn(TextColumn::new(self.keep)),
+        };
+        self.columns.push((name, column, values));
+        i
+    }
+
+    fn push(&mut self, i: usize, file: &str, line: usize, token: &str) -> Result<(), ReadError> {
+        match self.columns.get_mut(i) {
+            Some((_, _, Values::Learn(c))) => c.push(line, token),
+            Some((name, column, Values::Typed(t, data))) => {
+                if t.push(data, line, token) {
+                    return Ok(());
+                }
+                return Err(ReadError::Ascii {
+                    file: file.to_owned(),
+                    line,
+                    field: format!("column {column} ({name})"),
+                    message: format!(
+                        "{} is not a value of the column's type {}: the file changed since it \
+                         was first read",
+                        quoted(token),
+                        t.ty.name()
+                    ),
+                });
             }
-            match values.finish() {
-                Ok(data) => attributes.push(Attribute { name, data }),
-                Err((line, token)) => notes.push(format!(
-                    "{file}: column {column} ({name}) is not carried to the output: line \
-                     {line} holds {}, not a number",
-                    quoted(&token)
-                )),
+            _ => {}
+        }
+        Ok(())
+    }
+
+    /// The values read since the last batch, as attributes, in column order.
+    fn take_batch(&mut self) -> Vec<Attribute> {
+        let mut attributes = Vec::new();
+        for (name, _, values) in &mut self.columns {
+            if let Values::Typed(t, data) = values {
+                let data = std::mem::replace(data, AttributeData::with_capacity(t.ty, 0));
+                attributes.push(Attribute {
+                    name: name.clone(),
+                    data,
+                });
             }
         }
         attributes
+    }
+
+    /// The attributes (those kept, or of the last batch), in column order, except those
+    /// `skip` says, and every column's type; a column that holds something other than
+    /// numbers is dropped with a note (when its type is learnt).
+    fn finish(
+        mut self,
+        file: &str,
+        skip: impl Fn(usize) -> bool,
+        notes: &mut Vec<String>,
+    ) -> (Vec<Attribute>, Vec<Option<TextColumnType>>) {
+        if self.schema.is_some() {
+            let types = self
+                .columns
+                .iter()
+                .map(|(_, _, v)| match v {
+                    Values::Typed(t, _) => Some(*t),
+                    _ => None,
+                })
+                .collect();
+            return (self.take_batch(), types);
+        }
+        let mut attributes = Vec::with_capacity(self.columns.len());
+        let mut types = Vec::with_capacity(self.columns.len());
+        for (i, (name, column, values)) in self.columns.into_iter().enumerate() {
+            let Values::Learn(values) = values else {
+                types.push(None);
+                continue;
+            };
+            if skip(i) {
+                types.push(None);
+                continue;
+            }
+            match values.column_type() {
+                Ok(t) => {
+                    types.push(Some(t));
+                    if self.keep
+                        && let Ok(data) = values.finish()
+                    {
+                        attributes.push(Attribute { name, data });
+                    }
+                }
+                Err((line, token)) => {
+                    types.push(None);
+                    notes.push(format!(
+                        "{file}: column {column} ({name}) is not carried to the output: line \
+                         {line} holds {}, not a number",
+                        quoted(&token)
+                    ));
+                }
+            }
+        }
+        (attributes, types)
     }
 }
 
 /// Whether columns 4–6 of a headerless file hold unit vectors on every row so far.
 #[derive(Debug, Default)]
 struct UnitCheck {
+    /// The normals, if kept.
     normals: Vec<[f64; 3]>,
+    keep: bool,
     /// Why they are not normals: the first row that is not a unit vector, and what it holds.
     failed: Option<(usize, String)>,
     any_unit: bool,
@@ -96,12 +232,16 @@ impl UnitCheck {
                 let length = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
                 if v == [0.0; 3] || v.iter().all(|c| c.is_nan()) {
                     // A missing normal, kept as zero.
-                    self.normals.push([0.0; 3]);
+                    if self.keep {
+                        self.normals.push([0.0; 3]);
+                    }
                     return;
                 }
                 if (length - 1.0).abs() <= UNIT_TOLERANCE {
                     self.any_unit = true;
-                    self.normals.push(v);
+                    if self.keep {
+                        self.normals.push(v);
+                    }
                     return;
                 }
                 format!("{} {} {} has length {length:.6}", v[0], v[1], v[2])
@@ -112,6 +252,47 @@ impl UnitCheck {
         // Not normals: their memory is not needed.
         self.normals = Vec::new();
     }
+}
+
+/// Hands on the batch of a pass in batches: its points, the normals of columns 4–6 when the
+/// first pass took them as such, and the attributes.
+fn hand_on<E: From<ReadError>>(
+    cloud: &mut CloudBuilder,
+    check: Option<&mut UnitCheck>,
+    attributes: &mut TextAttributes<'_>,
+    pass: &mut Pass<'_, E>,
+    file: &str,
+    line: usize,
+) -> Result<(), E> {
+    let Pass::Batches {
+        schema,
+        sink,
+        handed,
+        ..
+    } = pass
+    else {
+        return Ok(());
+    };
+    let fresh = CloudBuilder::new(cloud.normals.is_some(), 0);
+    let mut batch = std::mem::replace(cloud, fresh).finish();
+    if schema.normals {
+        let normals = check.map(|c| std::mem::take(&mut c.normals));
+        if normals.as_ref().map(Vec::len) != Some(batch.points.len()) {
+            return Err(ReadError::Ascii {
+                file: file.to_owned(),
+                line,
+                field: "columns 4-6".to_owned(),
+                message: "no longer unit vectors on every row: the file changed since it was \
+                          first read"
+                    .to_owned(),
+            }
+            .into());
+        }
+        batch.normals = normals;
+    }
+    batch.attributes = attributes.take_batch();
+    *handed = true;
+    sink(batch)
 }
 
 /// Reads rows of columns (`.xyz`, `.txt`, `.pts`, `.asc`) and reports what it noticed. Columns are
@@ -258,12 +439,30 @@ pub(crate) fn read_xyz_slots(
     options: &ReadOptions,
     slots: &[&str],
 ) -> Result<ReadOutcome, ReadError> {
+    let (cloud, schema) = xyz_pass(reader, name, options, slots, &mut Pass::Whole)?;
+    Ok(ReadOutcome {
+        cloud,
+        notes: schema.notes,
+    })
+}
+
+/// One pass over a headerless text file ([`read_xyz_slots`]) as `pass` says: the cloud (empty
+/// unless [`Pass::Whole`]) and what was learnt of its columns.
+fn xyz_pass<E: From<ReadError>>(
+    reader: impl BufRead,
+    name: &str,
+    options: &ReadOptions,
+    slots: &[&str],
+    pass: &mut Pass<'_, E>,
+) -> Result<(PointCloud, TextSchema), E> {
     let mut lines = Lines::new(reader, 0);
     let mut roles: Vec<Role> = Vec::new();
     let mut first_row = true;
     let mut cloud = CloudBuilder::new(false, 0);
     let mut check: Option<UnitCheck> = None;
-    let mut attributes = TextAttributes::default();
+    let mut attributes = TextAttributes::new(pass);
+    let schema_normals = pass.schema().map(|s| s.normals);
+    let mut last_line = 0;
     // Column names from the file itself: CloudCompare writes them as a comment before the
     // rows, `//X Y Z Nx Ny Nz`; `--columns` overrides them. Split once the first row of
     // values shows the separator.
@@ -330,14 +529,16 @@ pub(crate) fn read_xyz_slots(
                 return Err(ReadError::RasterGrid {
                     file: name.to_owned(),
                     line,
-                });
+                }
+                .into());
             }
             if found < 3 {
                 return Err(ReadError::UnsupportedColumnCount {
                     file: name.to_owned(),
                     line,
                     found,
-                });
+                }
+                .into());
             }
             let by = match (&options.columns, &named) {
                 (None, Some((_, at))) => format!("the `//` line {at}"),
@@ -359,7 +560,8 @@ pub(crate) fn read_xyz_slots(
                             found,
                             named: columns.to_string(),
                             by,
-                        });
+                        }
+                        .into());
                     }
                     cloud = CloudBuilder::new(columns.has_normals() && slots.len() > 3, 0);
                     columns
@@ -378,7 +580,12 @@ pub(crate) fn read_xyz_slots(
                 None => {
                     let normals = found >= 6 && slots.len() > 3;
                     if normals {
-                        check = Some(UnitCheck::default());
+                        check = Some(UnitCheck {
+                            // A whole read keeps them in case they are normals; a pass in
+                            // batches, when the first pass found they are.
+                            keep: schema_normals.unwrap_or(matches!(pass, Pass::Whole)),
+                            ..UnitCheck::default()
+                        });
                     }
                     (0..found)
                         .map(|c| {
@@ -401,7 +608,8 @@ pub(crate) fn read_xyz_slots(
                 line,
                 found,
                 expected: roles.len(),
-            });
+            }
+            .into());
         }
         let mut values = [0.0; 6];
         let mut candidate: Result<[f64; 3], String> = Ok([0.0; 3]);
@@ -423,7 +631,7 @@ pub(crate) fn read_xyz_slots(
                     }
                 }
                 Role::Candidate(k, i) => {
-                    attributes.push(i, line, token);
+                    attributes.push(i, name, line, token)?;
                     if let Ok(v) = &mut candidate {
                         // NaN is let through: `nan nan nan` is a missing normal, as the
                         // curvature output writes for a failed point.
@@ -443,14 +651,43 @@ pub(crate) fn read_xyz_slots(
                         }
                     }
                 }
-                Role::Attribute(i) => attributes.push(i, line, token),
+                Role::Attribute(i) => attributes.push(i, name, line, token)?,
                 Role::Skip => {}
             }
         }
         if let Some(check) = &mut check {
             check.push(line, candidate);
         }
-        cloud.push(values);
+        last_line = line;
+        match pass {
+            Pass::Whole => cloud.push(values),
+            Pass::Profile => {}
+            Pass::Batches { max, .. } => {
+                cloud.push(values);
+                if cloud.points.len() as u64 >= *max {
+                    hand_on(
+                        &mut cloud,
+                        check.as_mut(),
+                        &mut attributes,
+                        pass,
+                        name,
+                        line,
+                    )?;
+                }
+            }
+        }
+    }
+    if let Pass::Batches { handed, .. } = pass
+        && (!*handed || !cloud.points.is_empty())
+    {
+        hand_on(
+            &mut cloud,
+            check.as_mut(),
+            &mut attributes,
+            pass,
+            name,
+            last_line,
+        )?;
     }
     let mut cloud = cloud.finish();
     let mut notes = Vec::new();
@@ -460,7 +697,9 @@ pub(crate) fn read_xyz_slots(
         if let Some(check) = check {
             match check.failed {
                 None if check.any_unit => {
-                    cloud.normals = Some(check.normals);
+                    if matches!(pass, Pass::Whole) {
+                        cloud.normals = Some(check.normals);
+                    }
                     normals_found = true;
                 }
                 None => notes.push(format!(
@@ -503,8 +742,70 @@ pub(crate) fn read_xyz_slots(
             }
         }
     }
-    cloud.attributes = attributes.finish(name, |i| normal_columns.contains(&i), &mut notes);
-    Ok(ReadOutcome { cloud, notes })
+    let (kept, columns) = attributes.finish(name, |i| normal_columns.contains(&i), &mut notes);
+    if matches!(pass, Pass::Whole) {
+        cloud.attributes = kept;
+    }
+    let schema = match pass.schema() {
+        // The notes of the first pass, which learnt what this one reads.
+        Some(schema) => schema.clone(),
+        None => TextSchema {
+            columns,
+            normals: normals_found,
+            notes,
+            csv: false,
+        },
+    };
+    Ok((cloud, schema))
+}
+
+/// The first pass over a text file (CSV if `csv`, else headerless XYZ) read in batches: what
+/// its columns are, in constant memory.
+pub(crate) fn profile(
+    reader: impl BufRead,
+    name: &str,
+    csv: bool,
+    options: &ReadOptions,
+) -> Result<TextSchema, ReadError> {
+    let pass = &mut Pass::<ReadError>::Profile;
+    let (_, schema) = if csv {
+        csv::csv_pass(reader, name, options, &SLOT_NAMES, pass)?
+    } else {
+        xyz_pass(reader, name, options, &SLOT_NAMES, pass)?
+    };
+    Ok(schema.with_csv(csv))
+}
+
+impl TextSchema {
+    fn with_csv(mut self, csv: bool) -> Self {
+        self.csv = csv;
+        self
+    }
+}
+
+/// Reads a text file as its first pass `schema` says, handing the rows to `sink` in clouds of
+/// at most `max` points, with exactly the values a whole read gives; returns the first pass's
+/// notes.
+pub(crate) fn read_batches<E: From<ReadError>>(
+    reader: impl BufRead,
+    name: &str,
+    options: &ReadOptions,
+    schema: &TextSchema,
+    max: u64,
+    sink: &mut dyn FnMut(PointCloud) -> Result<(), E>,
+) -> Result<Vec<String>, E> {
+    let pass = &mut Pass::Batches {
+        schema,
+        max: max.max(1),
+        sink,
+        handed: false,
+    };
+    if schema.csv {
+        csv::csv_pass(reader, name, options, &SLOT_NAMES, pass)?;
+    } else {
+        xyz_pass(reader, name, options, &SLOT_NAMES, pass)?;
+    }
+    Ok(schema.notes.clone())
 }
 
 mod csv;

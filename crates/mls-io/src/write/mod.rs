@@ -11,7 +11,7 @@ use std::fs::File;
 use std::io::{self, BufWriter, Write};
 use std::path::{Path, PathBuf};
 
-use rows::{Cursor, TextHeader, write_ply_rows, write_text_rows};
+use rows::{Cursor, TextHeader, write_ply_body, write_ply_header, write_ply_rows, write_text_rows};
 
 use crate::attributes::{Attribute, AttributeData};
 use crate::error::WriteError;
@@ -538,6 +538,160 @@ pub fn write_las_chunks<E: From<WriteError>>(
     write_atomically(path, |out| {
         crate::las::write_file_chunks(out, &file, compressed, template, body)
     })
+}
+
+/// Writes a table of `rows` rows to `path` in `format` a chunk at a time, atomically: `body`
+/// hands the chunks, each a table of the same columns, to [`ChunkSink::write`]; the file is
+/// renamed over `path` only when `body` succeeds and exactly `rows` rows were written. The
+/// file is the one [`write_point_cloud_as_with`] writes for the whole table, byte for byte,
+/// given the same `options`; for LAS/LAZ, `options.las` must be given, the layout of a LAS
+/// input or [`LasTemplate::fitted`] to the table's bounding box (as a whole table without a
+/// template is written).
+///
+/// # Errors
+/// `body`'s; those of [`write_point_cloud_as_with`]; [`WriteError::RowCount`] when the
+/// rows written are not `rows`; [`WriteError::Las`] for LAS without a layout or with chunks
+/// whose columns differ; [`WriteError::ReadOnlyFormat`] for E57. On any error no file is left
+/// behind.
+pub fn write_point_cloud_chunks<E: From<WriteError>>(
+    path: &Path,
+    format: FileFormat,
+    options: &WriteOptions<'_>,
+    rows: u64,
+    body: impl FnOnce(&mut ChunkSink<'_>) -> Result<(), E>,
+) -> Result<(), E> {
+    let file = path.display().to_string();
+    match format {
+        FileFormat::E57 => Err(WriteError::ReadOnlyFormat {
+            file,
+            format: "E57",
+        }
+        .into()),
+        FileFormat::Las | FileFormat::Laz => {
+            let Some(template) = options.las else {
+                return Err(WriteError::Las {
+                    file,
+                    message: "a LAS file written in chunks needs its layout (a template)"
+                        .to_owned(),
+                }
+                .into());
+            };
+            write_las_chunks(path, format == FileFormat::Laz, template, |sink| {
+                let mut chunks = ChunkSink {
+                    kind: SinkKind::Las(sink),
+                    file: file.clone(),
+                    declared: rows,
+                    written: 0,
+                };
+                body(&mut chunks)?;
+                chunks.finish().map_err(E::from)
+            })
+        }
+        FileFormat::Ply | FileFormat::Csv | FileFormat::Xyz => write_atomically(path, |out| {
+            let mut chunks = ChunkSink {
+                kind: SinkKind::Rows {
+                    out,
+                    format,
+                    ply_format: options.ply_format,
+                    quality: options.ply_quality.map(str::to_owned),
+                },
+                file: file.clone(),
+                declared: rows,
+                written: 0,
+            };
+            body(&mut chunks)?;
+            chunks.finish().map_err(E::from)
+        }),
+    }
+}
+
+/// Where [`write_point_cloud_chunks`] writes the chunks.
+pub struct ChunkSink<'a> {
+    kind: SinkKind<'a>,
+    file: String,
+    declared: u64,
+    written: u64,
+}
+
+enum SinkKind<'a> {
+    Las(&'a mut crate::LasSink),
+    Rows {
+        out: &'a mut dyn Write,
+        format: FileFormat,
+        ply_format: PlyFormat,
+        quality: Option<String>,
+    },
+}
+
+impl std::fmt::Debug for ChunkSink<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("ChunkSink")
+            .field("file", &self.file)
+            .field("declared", &self.declared)
+            .field("written", &self.written)
+            .finish_non_exhaustive()
+    }
+}
+
+impl ChunkSink<'_> {
+    /// Appends the rows of `columns`, the same columns (names and types) in every chunk; the
+    /// header is written with the first.
+    ///
+    /// # Errors
+    /// Those of the format's writer for a whole table, and [`WriteError::RowCount`] for
+    /// more rows than declared.
+    pub fn write(&mut self, columns: &[Column<'_>]) -> Result<(), WriteError> {
+        let file = self.file.as_str();
+        let rows = validate(file, columns)?;
+        let first = self.written == 0;
+        if self.written + rows as u64 > self.declared {
+            return Err(self.row_count(self.written + rows as u64));
+        }
+        match &mut self.kind {
+            SinkKind::Las(sink) => sink.write(columns)?,
+            SinkKind::Rows {
+                out,
+                format,
+                ply_format,
+                quality,
+            } => match format {
+                FileFormat::Ply => {
+                    let columns = with_quality(columns, quality.as_deref());
+                    if first {
+                        write_ply_header(out, file, &columns, self.declared, *ply_format)?;
+                    }
+                    write_ply_body(out, file, &columns, rows, *ply_format)?;
+                }
+                _ => {
+                    let (separator, header) = if *format == FileFormat::Csv {
+                        (',', TextHeader::Names)
+                    } else {
+                        (' ', TextHeader::Comment)
+                    };
+                    let header = if first { header } else { TextHeader::None };
+                    write_text_rows(out, file, columns, rows, separator, header)?;
+                }
+            },
+        }
+        self.written += rows as u64;
+        Ok(())
+    }
+
+    /// Checks that every declared row was written.
+    fn finish(&self) -> Result<(), WriteError> {
+        if self.written != self.declared {
+            return Err(self.row_count(self.written));
+        }
+        Ok(())
+    }
+
+    fn row_count(&self, written: u64) -> WriteError {
+        WriteError::RowCount {
+            file: self.file.clone(),
+            declared: self.declared,
+            written,
+        }
+    }
 }
 
 /// Writes through a temporary file in the destination's directory, renamed over the

@@ -41,6 +41,18 @@ pub(super) fn write_ply_rows(
     rows: usize,
     format: PlyFormat,
 ) -> Result<(), WriteError> {
+    write_ply_header(out, file, columns, rows as u64, format)?;
+    write_ply_body(out, file, columns, rows, format)
+}
+
+/// The PLY header of a table of `rows` rows.
+pub(super) fn write_ply_header(
+    out: &mut impl Write,
+    file: &str,
+    columns: &[Column<'_>],
+    rows: u64,
+    format: PlyFormat,
+) -> Result<(), WriteError> {
     let mut header = String::from("ply\n");
     header.push_str(match format {
         PlyFormat::BinaryLittleEndian => "format binary_little_endian 1.0\n",
@@ -58,7 +70,17 @@ pub(super) fn write_ply_rows(
         );
     }
     header.push_str("end_header\n");
-    out.write_all(header.as_bytes()).map_err(io_error(file))?;
+    out.write_all(header.as_bytes()).map_err(io_error(file))
+}
+
+/// The PLY rows of a table, after its header.
+pub(super) fn write_ply_body(
+    out: &mut impl Write,
+    file: &str,
+    columns: &[Column<'_>],
+    rows: usize,
+    format: PlyFormat,
+) -> Result<(), WriteError> {
     match format {
         PlyFormat::BinaryLittleEndian => write_binary_rows(out, file, columns, rows),
         PlyFormat::Ascii => write_text_rows(out, file, columns, rows, ' ', TextHeader::None),

@@ -9,7 +9,7 @@ use mls_io::{AttributeData, FileFormat, PointCloud, ReadError, read_point_cloud}
 use crate::assert_message;
 
 /// One scan to write: points in the scanner's frame, its pose, and per-point values.
-struct Scan {
+pub(crate) struct Scan {
     /// `w, x, y, z` of a unit quaternion.
     rotation: [f64; 4],
     translation: [f64; 3],
@@ -20,7 +20,7 @@ struct Scan {
 }
 
 /// Writes `scans` as an E57 file.
-fn write_e57(path: &Path, scans: &[Scan]) {
+pub(crate) fn write_e57(path: &Path, scans: &[Scan]) {
     let mut writer = E57Writer::from_file(path, "file-guid").unwrap();
     for (s, scan) in scans.iter().enumerate() {
         let mut prototype = vec![
@@ -89,7 +89,7 @@ fn unit_quaternion(q: [f64; 4]) -> [f64; 4] {
     q.map(|c| c / n)
 }
 
-fn two_scans() -> Vec<Scan> {
+pub(crate) fn two_scans() -> Vec<Scan> {
     let grid = |offset: f64, invalid_every: usize| -> Vec<([f64; 3], bool)> {
         (0..30)
             .map(|i| {

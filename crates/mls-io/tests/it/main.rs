@@ -9,6 +9,7 @@ mod las;
 mod malformed;
 mod ply_fixtures;
 mod roundtrip;
+mod stream;
 mod text;
 
 /// Seeds, named so that a failure can be replayed.
