@@ -488,7 +488,6 @@ fn check_cloud(
     let mut orientation = Line::new(cloud, "normals (`--normals auto`, default `--orient`)");
     orientation.h = (scale.h, wh);
     if let Some(cn) = &command_normals {
-        orientation.source = cn.source.clone();
         check_orientation(
             tally,
             &mut orientation,
@@ -605,6 +604,15 @@ fn check_orientation(
         ORIENTATION,
         f64::from(share < doc::MIN_CONSISTENCY || printed != Some(expected.as_str())),
         seed,
+    );
+    line.source = format!(
+        "{source}; recount {expected}% of {} pairs{}",
+        recount.compared,
+        if decisive > 0 {
+            format!(", {wrong} of {decisive} decisive normals facing the wrong way")
+        } else {
+            String::new()
+        }
     );
     line.compared += 1;
 }
