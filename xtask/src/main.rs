@@ -18,6 +18,7 @@ mod robustness;
 mod validate;
 mod validate_adaptive;
 mod validate_defaults;
+mod validate_e2e;
 mod validate_formulas;
 mod validate_jet;
 mod validate_orient;

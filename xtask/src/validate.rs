@@ -97,6 +97,13 @@ pub(crate) enum Q {
     OrientSheet,
     PairAgreement,
     PerQuery,
+    E2eH,
+    E2eOrientation,
+    E2eJet,
+    E2ePaper,
+    E2eAdaptive,
+    E2eTiled,
+    E2eStatus,
 }
 
 /// A row: its name, the threshold above which the run fails, the production entry point and
@@ -109,7 +116,7 @@ struct Row {
 
 /// The streams the CLI runs; their results are bitwise one unchunked call's (stream row).
 const CURV: &str = "`curvature_stream`, `projection_stream` / `mls_ad::witness`";
-const ROWS: [Row; 37] = [
+const ROWS: [Row; 44] = [
     row("n", THRESHOLD, CURV),
     row("J", THRESHOLD, CURV),
     row("∂²n", THRESHOLD, CURV),
@@ -234,6 +241,41 @@ const ROWS: [Row; 37] = [
         "n, g, k1, k2 at queries spread wider than the support (per query)",
         THRESHOLD,
         "`Evaluator::curvature_at` (support from `samples_within`) / `mls_ad::witness`, `mls_ad::classify`",
+    ),
+    row(
+        "end to end: h",
+        SPACING_THRESHOLD,
+        "`mlscurv curvature`'s library entry (`pipeline::build_surface`, in memory) / `mls_ad::spacing_witness` with the documented rule (`mls_ad::documented`)",
+    ),
+    row(
+        "end to end: orientation (share facing the wrong way; 1 where the pairs agree below 99 % or not as printed)",
+        0.0,
+        "`mlscurv curvature`'s normals (`pipeline::normals`, `--normals auto`, default `--orient`) / the shape's outside or up, `mls_ad::pair_agreement`",
+    ),
+    row(
+        "end to end: jet k1, k2 (and the foot with --at projected)",
+        THRESHOLD,
+        "`mlscurv curvature` `--method jet` (default), `--at input`, `projected` / `mls_ad::jet_candidates` on the witnesses' h and normals, file normals as slopes, estimated ones as frame",
+    ),
+    row(
+        "end to end: paper n, k1, k2 (and stationary with --at projected)",
+        THRESHOLD,
+        "`mlscurv curvature --method paper`, `--at input`, `projected` / `mls_ad::classify`, `witness_curvature`, `stationarity` on the witnesses' h and normals",
+    ),
+    row(
+        "end to end: adaptive h, k1, k2",
+        THRESHOLD,
+        "`mlscurv curvature --method paper --adaptive` / `mls_ad::adaptive_witness` from the witness's h",
+    ),
+    row(
+        "end to end: tiled k1, k2, n (1 for a single tile or h beyond 5 % of the rule's)",
+        THRESHOLD,
+        "`mls_cli::tiled::curvature` (`--memory 66MiB` on a LAS file) / `mls_ad::jet_candidates`, `mls_ad::classify`",
+    ),
+    row(
+        "end to end: status (1 where the witness's differs)",
+        0.0,
+        "`mlscurv curvature`, every run above / the witnesses' verdicts",
     ),
 ];
 
@@ -365,6 +407,11 @@ pub(crate) fn run(o: &Options) -> Result<()> {
     } else {
         String::new()
     };
+    let (e2e_table, e2e_failed) = if o.replay.is_none() {
+        crate::validate_e2e::check_end_to_end(&mut tally, o.seed, o.quick)?
+    } else {
+        (String::new(), Vec::new())
+    };
     let elapsed = start.elapsed().as_secs_f64();
     writeln!(
         report,
@@ -404,6 +451,8 @@ pub(crate) fn run(o: &Options) -> Result<()> {
     failed.extend(defaults_failed);
     report.push_str(&defaults_table);
     report.push_str(&orientation_table);
+    failed.extend(e2e_failed);
+    report.push_str(&e2e_table);
     if !unreached.is_empty() {
         failed.push(format!(
             "rows that compared nothing ({}; too few cases to reach them? --evals sets the sweep's size)",

@@ -7,7 +7,8 @@
 use mls_ad::documented as doc;
 use mls_core::adaptive::AdaptiveConfig;
 use mls_core::normals::{
-    DEFAULT_H_FACTOR, DEFAULT_NEIGHBOURS, DEFAULT_SPACING_NEIGHBOURS, NormalsConfig, Orientation,
+    DEFAULT_DEGENERACY_TOLERANCE, DEFAULT_H_FACTOR, DEFAULT_NEIGHBOURS, DEFAULT_SPACING_NEIGHBOURS,
+    NormalsConfig, Orientation,
 };
 use mls_core::{Cutoff, JetConfig, MlsConfig, NormalData};
 
@@ -192,6 +193,30 @@ pub(crate) fn defaults() -> Vec<Documented> {
             "README.md, \"Scan lines far apart\"",
         ),
         field(
+            "normals::DEFAULT_DEGENERACY_TOLERANCE",
+            DEFAULT_DEGENERACY_TOLERANCE,
+            doc::DEGENERACY_TOLERANCE,
+            "README.md, status code 7",
+        ),
+        field(
+            "NormalsConfig::default().degeneracy_tolerance",
+            normals.degeneracy_tolerance,
+            doc::DEGENERACY_TOLERANCE,
+            "README.md, status code 7",
+        ),
+        field(
+            "pipeline::MIN_FILE_CONSISTENCY",
+            mls_cli::pipeline::MIN_FILE_CONSISTENCY,
+            doc::MIN_CONSISTENCY,
+            "README.md --normals, docs/orientation.md \"Normals from a file\"",
+        ),
+        field(
+            "pipeline::MIN_ESTIMATED_CONSISTENCY",
+            mls_cli::pipeline::MIN_ESTIMATED_CONSISTENCY,
+            doc::MIN_CONSISTENCY,
+            "README.md (estimated normals below 99 %), docs/orientation.md",
+        ),
+        field(
             "NormalsConfig::default().orientation is outward",
             normals.orientation == Orientation::Outward,
             true,
@@ -206,6 +231,14 @@ pub(crate) fn defaults() -> Vec<Documented> {
         field(
             "MlsConfig::new(h).cutoff",
             radius(mls.cutoff),
+            Some(doc::CUTOFF),
+            "README.md --cutoff",
+        ),
+        field(
+            "mls_cli::DEFAULT_CUTOFF (--cutoff's default on the command line)",
+            mls_cli::parse_cutoff(mls_cli::DEFAULT_CUTOFF)
+                .ok()
+                .and_then(radius),
             Some(doc::CUTOFF),
             "README.md --cutoff",
         ),

@@ -241,7 +241,7 @@ fn cuboid(n: usize, centre: Vector, rng: &mut ChaCha8Rng) -> Cloud {
 }
 
 /// The summary's "P% of neighbour pairs agree", as printed.
-fn printed_agreement(source: &str) -> Option<&str> {
+pub(crate) fn printed_agreement(source: &str) -> Option<&str> {
     let end = source.find("% of neighbour pairs agree")?;
     let start = source[..end].rfind(' ')? + 1;
     Some(&source[start..end])

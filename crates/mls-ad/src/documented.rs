@@ -83,6 +83,19 @@ pub const CUTOFF: f64 = 5.0;
 /// within the support" (README.md, status codes).
 pub const MIN_NEIGHBOURS: usize = 3;
 
+/// The role of estimated normals in the jet: the frame only, heights fitted alone (README.md's
+/// example summary: "normals give the frame only"; `docs/accuracy.md`: "estimated normals give
+/// the frame only, as the CLI does"). File normals are slopes ([`JET_NORMALS`]).
+pub const ESTIMATED_NORMALS: NormalData = NormalData::Ignore;
+/// The eigenvalue gap below which an estimated normal is undefined, relative to the largest
+/// eigenvalue: "λ1 − λ0 ≤ 1e-6 λ2" (README.md, status code 7).
+pub const DEGENERACY_TOLERANCE: f64 = 1e-6;
+/// The least share of neighbour pairs whose normals agree in sign before the command warns,
+/// for file normals and for estimated ones: "when fewer than 99 % of neighbouring pairs agree
+/// in sign … a warning says so" (README.md, `--normals`; "Estimated normals whose oriented
+/// neighbour pairs agree in sign below 99 %"; `docs/orientation.md`: "warn below 99 %").
+pub const MIN_CONSISTENCY: f64 = 0.99;
+
 /// The adaptive ladder's number of scales: "h per point, from the chosen h up to 4× it"
 /// (README.md, `--adaptive`), on the √2 ladder of `docs/derivation.md` (√2⁴ = 4: five scales).
 pub const ADAPTIVE_SCALES: usize = 5;

@@ -130,6 +130,10 @@ pub fn positive_finite(s: &str) -> Result<f64, String> {
     }
 }
 
+/// The default of `--cutoff` (`mlscurv curvature`, `project`, `eval`), as the command line
+/// writes it: the kernel truncated at 5 h (README.md, `--cutoff`).
+pub const DEFAULT_CUTOFF: &str = "5";
+
 /// The value parser of `--cutoff`: a factor of at least [`Cutoff::MIN_FACTOR`], or `none`.
 pub fn parse_cutoff(s: &str) -> Result<Cutoff, String> {
     if s.eq_ignore_ascii_case("none") {

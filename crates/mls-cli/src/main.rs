@@ -86,7 +86,7 @@ struct SurfaceArgs {
     #[command(flatten)]
     scale: ScaleArgs,
     /// Kernel cutoff radius in units of h (at least 2), or `none` for the untruncated kernel.
-    #[arg(long, value_parser = parse_cutoff, default_value = "5", allow_negative_numbers = true)]
+    #[arg(long, value_parser = parse_cutoff, default_value = mls_cli::DEFAULT_CUTOFF, allow_negative_numbers = true)]
     cutoff: mls_core::Cutoff,
     /// Where normals come from.
     #[arg(long, value_enum, default_value_t = NormalsMode::Auto)]
@@ -212,7 +212,7 @@ struct EvalArgs {
     #[arg(long, value_parser = positive_finite, allow_negative_numbers = true)]
     h: Option<f64>,
     /// Kernel cutoff radius in units of h, or `none`.
-    #[arg(long, value_parser = parse_cutoff, default_value = "5", allow_negative_numbers = true)]
+    #[arg(long, value_parser = parse_cutoff, default_value = mls_cli::DEFAULT_CUTOFF, allow_negative_numbers = true)]
     cutoff: mls_core::Cutoff,
     /// Output file (.csv, .ply, .xyz/.txt/.pts/.asc, .las/.laz, by extension); standard output (CSV unless
     /// --output-format) when absent or `-`.

@@ -25,8 +25,9 @@ pub use self::input::{
     read_quietly, to_points,
 };
 pub use self::oriented::{
-    Normals, check_file_normals, estimated_normals_warning, file_normals_agreement,
-    file_normals_warning, normals, scan_viewpoints,
+    MIN_ESTIMATED_CONSISTENCY, MIN_FILE_CONSISTENCY, Normals, check_file_normals,
+    estimated_normals_warning, file_normals_agreement, file_normals_warning, normals,
+    scan_viewpoints,
 };
 pub use self::scale::{Scale, check_scale, choose_h_on, print_warning};
 pub use crate::output::{Carried, Output, check_output, write_stdout};

@@ -33,7 +33,7 @@ const CONSISTENCY_SAMPLE: usize = 20_000;
 /// bunny's estimated ones 100.0 %, the aerial tile's 99.5 %, a generated airborne scene's exact
 /// ones with trees and walls 99.6 %); 1 % of the normals flipped gives 98 %, a tenth 82 %,
 /// random signs 50 % (`docs/orientation.md`).
-const MIN_FILE_CONSISTENCY: f64 = 0.99;
+pub const MIN_FILE_CONSISTENCY: f64 = 0.99;
 
 /// The least share of neighbour pairs whose estimated, oriented normals agree in sign (the
 /// orientation's own count over the whole graph, as the summary prints it) before a warning:
@@ -44,7 +44,7 @@ const MIN_FILE_CONSISTENCY: f64 = 0.99;
 /// prefers aligned normals to opposed ones (weights `1 − nᵢ·nⱼ`), left 63.57 % on the bunny
 /// with every curvature's sign flipped in most of it, and a fraction f of isolated flips gives
 /// 1 − 2f(1 − f) (98 % at 1 %). `docs/orientation.md`.
-const MIN_ESTIMATED_CONSISTENCY: f64 = 0.99;
+pub const MIN_ESTIMATED_CONSISTENCY: f64 = 0.99;
 
 /// The warning for estimated normals whose oriented neighbour pairs agree in sign at the share
 /// `agree` only, if it is below `MIN_ESTIMATED_CONSISTENCY`. The run goes on: the normals are
