@@ -314,19 +314,28 @@ fn paper(x: &Vector3<f64>, o: &Output, w: &Witness, projected: bool) -> Result<f
 /// candidate nearest the command's k1, k2 is compared.
 fn jet(x: &Vector3<f64>, o: &Output, w: &Witness, projected: bool) -> Result<f64, ()> {
     let config = doc::jet_config(w.role);
+    let measure = |j: &mls_ad::JetWitness| {
+        let kappa = j.k1.abs().max(j.k2.abs()).max(1.0 / w.h);
+        let rounding = (1e3 * f64::EPSILON * j.condition / THRESHOLD).max(1.0);
+        let mut d = (o.k[0] - j.k1).abs().max((o.k[1] - j.k2).abs()) / kappa;
+        if projected {
+            d = d.max((o.at - j.foot).norm() / w.h);
+        }
+        d / rounding
+    };
+    // Heights only: a query the anchors share gets their blend (the witness's samples reach
+    // 12 h, the blend's anchors and their supports 11.5 h).
+    if let Some(blend) = mls_ad::ShareWitness::new(&w.samples, w.h, &config).shared(x) {
+        return if o.status == 0 {
+            Ok(measure(&blend))
+        } else {
+            Err(())
+        };
+    }
     let candidates = mls_ad::jet_candidates(x, &w.samples, w.h, &config);
     match (o.status, candidates) {
         (0, Ok(c)) => {
             let least = c.iter().map(|(m, _)| *m).fold(f64::INFINITY, f64::min);
-            let measure = |j: &mls_ad::JetWitness| {
-                let kappa = j.k1.abs().max(j.k2.abs()).max(1.0 / w.h);
-                let rounding = (1e3 * f64::EPSILON * j.condition / THRESHOLD).max(1.0);
-                let mut d = (o.k[0] - j.k1).abs().max((o.k[1] - j.k2).abs()) / kappa;
-                if projected {
-                    d = d.max((o.at - j.foot).norm() / w.h);
-                }
-                d / rounding
-            };
             Ok(c.iter()
                 .filter(|(m, _)| *m <= least * (1.0 + 1e-4))
                 .map(|(_, j)| measure(j))
@@ -439,8 +448,9 @@ const COMBINATIONS: [(Method, At, bool, &str); 5] = [
     (Method::Paper, At::Input, true, "--method paper --adaptive"),
 ];
 
-/// The reach, in h, of the witness's supports around a query: the jet's largest (8.5 h)
-/// and a projection's step, or the adaptive ladder's 5 h at 4 h.
+/// The reach, in h, of the witness's supports around a query: the jet's largest (8.5 h; 11.5 h
+/// with the anchors a heights-only query blends) and a projection's step, or the adaptive
+/// ladder's 5 h at 4 h.
 fn reach(adaptive: bool) -> f64 {
     if adaptive { 22.0 } else { 12.0 }
 }
@@ -825,8 +835,11 @@ fn check_tiled(
     };
     let run = mls_cli::tiled::TiledRun {
         input: &input,
+        input_format: mls_io::FileFormat::Las,
+        columns: None,
         output: &output_path,
         format: mls_io::FileFormat::Las,
+        ascii: false,
         options: &options,
         budget: TILED_BUDGET,
         temp_dir: Some(dir),
