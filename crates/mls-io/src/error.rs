@@ -104,6 +104,21 @@ pub enum ReadError {
         /// The `ncols` line.
         line: usize,
     },
+    /// A text file's point-count line (a single integer before the rows) states another
+    /// number of rows than follow it: a truncated or concatenated file.
+    #[error(
+        "{file}: line {line} states {stated} point(s), but {found} row(s) follow it: the file is truncated or holds more than that cloud"
+    )]
+    CountMismatch {
+        /// The file.
+        file: String,
+        /// The count line.
+        line: usize,
+        /// The count it states.
+        stated: u64,
+        /// The rows read.
+        found: u64,
+    },
     /// The column names given in [`ReadOptions::columns`](crate::ReadOptions::columns)
     /// (`--columns`) are not as many as the columns of the first data row (XYZ) or the
     /// header (CSV).

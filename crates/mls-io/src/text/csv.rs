@@ -16,7 +16,8 @@ use crate::{CloudBuilder, PointCloud, ReadOutcome, SLOT_NAMES};
 /// The first non-blank line is the header, after `//` if it starts with that (as
 /// CloudCompare and the CSV writer write it); fields are separated by commas, or by
 /// semicolons or tabs where the header has those and no comma. A first row holding a single
-/// non-negative integer is the point count CloudCompare's export can write, and is skipped.
+/// non-negative integer is the point count CloudCompare's export can write: not a point, and
+/// the rows after it must be as many ([`ReadError::CountMismatch`]).
 /// Names are matched case-insensitively after
 /// trimming whitespace and surrounding double quotes; `x`, `y`, `z` are required, `nx`, `ny`,
 /// `nz` are optional (all three or none) and any other column is an attribute under its
@@ -172,12 +173,16 @@ pub(crate) fn csv_pass<E: From<ReadError>>(
     let mut cloud = CloudBuilder::new(nx, 0);
     let mut first_row = true;
     let mut last_line = 0;
+    // The point-count line, if the file has one, and the rows read.
+    let mut stated: Option<(u64, usize)> = None;
+    let mut rows: u64 = 0;
     while let Some((line, text)) = lines.next_line(name)? {
         // CloudCompare's export can put the point count on the line after the header.
         if std::mem::replace(&mut first_row, false)
             && width > 1
-            && text.trim().parse::<u64>().is_ok()
+            && let Ok(n) = text.trim().parse::<u64>()
         {
+            stated = Some((n, line));
             continue;
         }
         let mut values = [0.0; 6];
@@ -220,6 +225,7 @@ pub(crate) fn csv_pass<E: From<ReadError>>(
             .into());
         }
         last_line = line;
+        rows += 1;
         match pass {
             Pass::Whole => cloud.push(values),
             Pass::Profile => {}
@@ -230,6 +236,17 @@ pub(crate) fn csv_pass<E: From<ReadError>>(
                 }
             }
         }
+    }
+    if let Some((stated, line)) = stated
+        && stated != rows
+    {
+        return Err(ReadError::CountMismatch {
+            file: name.to_owned(),
+            line,
+            stated,
+            found: rows,
+        }
+        .into());
     }
     if let Pass::Batches { handed, .. } = pass
         && (!*handed || !cloud.points.is_empty())

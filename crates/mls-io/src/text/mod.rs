@@ -301,7 +301,8 @@ fn hand_on<E: From<ReadError>>(
 ///
 /// Blank lines and lines whose first non-blank character is `#` are ignored. A first data
 /// row holding a single non-negative integer is the point-count line some scanners write at
-/// the top of `.pts` files (and CloudCompare after its header), and is skipped. The first
+/// the top of `.pts` files (and CloudCompare after its header): it is not a point, and the
+/// rows after it must be as many as it states ([`ReadError::CountMismatch`]). The first
 /// data row fixes the column count; every later row must have as many. A `//` line before
 /// the rows names the columns, split as the rows are (by tabs where both have them), as
 /// CloudCompare writes it, as does a first row of which no field is a number, or else the
@@ -473,6 +474,9 @@ fn xyz_pass<E: From<ReadError>>(
     let mut comment: Option<(String, usize)> = None;
     // Decided by each row until the first row of values, then kept for the file.
     let mut separator = Separator::Whitespace;
+    // The point-count line, if the file has one, and the rows read.
+    let mut stated: Option<(u64, usize)> = None;
+    let mut rows: u64 = 0;
     while let Some((line, text)) = lines.next_line(name)? {
         if let Some(rest) = text.trim_start().strip_prefix('#') {
             if roles.is_empty() {
@@ -498,6 +502,11 @@ fn xyz_pass<E: From<ReadError>>(
                     .is_some_and(|t| t.parse::<u64>().is_ok());
             let first = std::mem::replace(&mut first_row, false);
             if first && is_count_line {
+                stated = separator
+                    .fields(text)
+                    .next()
+                    .and_then(|t| t.parse::<u64>().ok())
+                    .map(|n| (n, line));
                 continue;
             }
             // A first row with no number among its tokens cannot be a point: it names the
@@ -659,6 +668,7 @@ fn xyz_pass<E: From<ReadError>>(
             check.push(line, candidate);
         }
         last_line = line;
+        rows += 1;
         match pass {
             Pass::Whole => cloud.push(values),
             Pass::Profile => {}
@@ -676,6 +686,17 @@ fn xyz_pass<E: From<ReadError>>(
                 }
             }
         }
+    }
+    if let Some((stated, line)) = stated
+        && stated != rows
+    {
+        return Err(ReadError::CountMismatch {
+            file: name.to_owned(),
+            line,
+            stated,
+            found: rows,
+        }
+        .into());
     }
     if let Pass::Batches { handed, .. } = pass
         && (!*handed || !cloud.points.is_empty())

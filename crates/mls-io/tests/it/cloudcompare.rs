@@ -107,7 +107,7 @@ fn bad_headers_are_refused_naming_file_line_and_column() {
         ("//X;Y;Nx;Ny;Nz;k\n1;2;3;4;5;6\n", &["line 1", "no `z`"]),
         ("//X Y Z X\n1 2 3 4\n", &["line 1", "`x` named twice"]),
         ("//X Y Z Nx Ny\n1 2 3 0 0\n", &["line 1", "some of nx"]),
-        ("//X,Y,Z,k1\n3\n1,2,3,oops\n", &["line 3", "column 4"]),
+        ("//X,Y,Z,k1\n1\n1,2,3,oops\n", &["line 3", "column 4"]),
     ];
     for (text, parts) in cases {
         let outcome = read_point_cloud_from_with(

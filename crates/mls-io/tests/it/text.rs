@@ -33,6 +33,40 @@ fn pts_point_count_line_is_skipped_once() {
     assert!(read_xyz("2\n3\n1 2 3\n".as_bytes(), "a.pts").is_err());
 }
 
+/// A count line that states another number of rows than follow (a truncated file, or a
+/// header with no rows) is an error naming the line, in headerless text as in CSV.
+#[test]
+fn a_count_line_must_match_the_rows() {
+    for (text, read, found) in [
+        ("5\n", 0, "a.pts"),
+        ("3\n1 2 3\n4 5 6\n", 2, "a.pts"),
+        ("//X Y Z\n3\n1 2 3\n", 1, "a.asc"),
+    ] {
+        let err = read_xyz(text.as_bytes(), found).unwrap_err();
+        assert!(
+            matches!(err, ReadError::CountMismatch { found: f, .. } if f == read),
+            "{text:?}: {err:?}"
+        );
+        assert!(
+            err.to_string().starts_with(&format!("{found}: line ")),
+            "{err}"
+        );
+    }
+    let err = read_csv("x,y,z\n2\n1,2,3\n".as_bytes(), "a.csv").unwrap_err();
+    assert!(
+        matches!(
+            err,
+            ReadError::CountMismatch {
+                line: 2,
+                stated: 2,
+                found: 1,
+                ..
+            }
+        ),
+        "{err:?}"
+    );
+}
+
 /// ESRI's `.asc` grids share CloudCompare's extension: a raster is refused as one, by its
 /// first keyword (any case), not read as a short row.
 #[test]
