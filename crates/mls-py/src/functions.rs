@@ -1,9 +1,10 @@
-//! `curvature`, `normals` and `project`: the commands' steps through `mls_cli` on arrays.
+//! `curvature`, `normals` and `project`: the commands' steps through `mls_pipeline` on arrays.
 
-use mls_cli::evaluate::{self, CurvatureColumns};
-use mls_cli::pipeline::{self, Built, Timings};
-use mls_cli::{CurvatureOptions, Method, NormalsMode, SurfaceOptions};
 use mls_core::{Parallelism, Point};
+use mls_pipeline::evaluate::{self, CurvatureColumns};
+use mls_pipeline::pipeline::{self, Built, Timings};
+use mls_pipeline::progress::NoProgress;
+use mls_pipeline::{CurvatureOptions, Method, NormalsMode, SurfaceOptions};
 use numpy::PyArrayMethods;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
@@ -118,7 +119,7 @@ pub(crate) fn curvature<'py>(
     };
     let threads = crate::threads(threads)?;
     if options.adaptive && options.method == Method::Jet {
-        return Err(PyValueError::new_err(mls_cli::ADAPTIVE_NEEDS_PAPER));
+        return Err(PyValueError::new_err(mls_pipeline::ADAPTIVE_NEEDS_PAPER));
     }
     let Input { array, normals } = Input::new(points, normals)?;
     let readonly = array.readonly();
@@ -146,7 +147,7 @@ pub(crate) fn curvature<'py>(
                 )?;
                 let jet = evaluate::jet_config(normals_from_file);
                 let out = t.time(evaluate::curvature_label(options.at), || {
-                    evaluate::curvature(points, &surface, &options, &jet, false)
+                    evaluate::curvature(points, &surface, &options, &jet, &NoProgress)
                 });
                 let summary = Summary {
                     scale,
@@ -336,7 +337,7 @@ pub(crate) fn project<'py>(
                     pipeline::fixed_surface,
                 )?;
                 let out = t.time("projection", || {
-                    evaluate::projection(points, &built.surface, false)
+                    evaluate::projection(points, &built.surface, &NoProgress)
                 });
                 let summary = Summary {
                     scale: built.scale,

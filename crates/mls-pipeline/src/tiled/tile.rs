@@ -156,7 +156,7 @@ pub(super) fn tile_curvature_oriented(
         &surface,
         options,
         jet.unwrap_or(&default_jet),
-        false,
+        &crate::progress::NoProgress,
     );
     Ok(TileResult {
         columns,

@@ -15,7 +15,7 @@ use super::{
     Carried, MIN_POINTS, Normals, Scale, Timings, check_file_normals, check_scale, choose_h_on,
     input_name, normals, print_warning, read, scan_viewpoints,
 };
-use crate::{Format, SurfaceOptions};
+use crate::SurfaceOptions;
 
 /// The surface `mlscurv eval` evaluates: the cloud's own `normals` (every one non-zero), h
 /// given or from the spacing (the default factor), checked against the cloud (its warnings
@@ -120,7 +120,7 @@ impl<S, F: for<'a> FnOnce(IndexedCloud<'a>, &[Vector], f64, Cutoff) -> Result<S,
 /// printing the warnings on stderr.
 pub fn prepare<S>(
     input: &Path,
-    format: Option<Format>,
+    format: Option<mls_io::FileFormat>,
     columns: Option<&mls_io::ColumnNames>,
     s: &SurfaceOptions,
     t: &mut Timings,
