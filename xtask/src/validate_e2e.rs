@@ -1,7 +1,7 @@
 //! The end-to-end rows of `cargo xtask validate`: `mlscurv curvature` through its library entry
-//! (`mls_pipeline::pipeline::build_surface`, `mls_pipeline::evaluate::jet_config` and
-//! `mls_pipeline::evaluate::curvature`, the three calls the binary and the Python package make; the
-//! tiled run through `mls_pipeline::tiled::curvature` on a LAS file) on generated clouds and the
+//! (`mls_pipeline::curvature`, the call the binary and the Python package make: the surface,
+//! the jet's configuration, the evaluation; the tiled run through
+//! `mls_pipeline::tiled::curvature` on a LAS file) on generated clouds and the
 //! bundled bunny, for the combinations users reach, against an independent pipeline assembled
 //! from the witnesses of mls-ad: its own h (`mls_ad::spacing_witness` with the documented
 //! rule), its own normals (the file's as they are; or `mls_ad::normal_witness` oriented by the
@@ -16,9 +16,9 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result};
 use mls_ad::documented as doc;
 use mls_core::{NormalData, Point, PointStatus, Sample, Vector};
-use mls_pipeline::evaluate::{self, CurvatureColumns};
-use mls_pipeline::pipeline::{self, Built, Timings};
-use mls_pipeline::{At, CurvatureOptions, Method, NormalsMode, SurfaceOptions};
+use mls_pipeline::evaluate::CurvatureColumns;
+use mls_pipeline::pipeline::{self, Timings};
+use mls_pipeline::{At, CurvatureOptions, CurvatureRun, Method, NormalsMode, SurfaceOptions};
 use mls_shapes::{Ellipsoid, HeightField, HeightFieldConfig, Sphere, Torus, random_area_uniform};
 use nalgebra::Vector3;
 use rand::seq::index::sample;
@@ -95,30 +95,24 @@ fn command(cloud: &Cloud, method: Method, at: At, adaptive: bool) -> Result<Run>
         at,
         adaptive,
     };
-    let mut t = Timings::default();
-    let Built {
+    let run = mls_pipeline::curvature(
+        mls_pipeline::Cloud {
+            points: &cloud.points,
+            normals: cloud.file_normals.clone(),
+            viewpoints: None,
+            name: &cloud.name,
+        },
+        &options,
+        &mut Timings::default(),
+        |_| {},
+    )?;
+    let CurvatureRun {
+        columns: out,
         scale,
         normals_source,
         normals_from_file,
-        surface,
-    } = pipeline::build_surface(
-        &cloud.points,
-        cloud.file_normals.clone(),
-        None,
-        &cloud.name,
-        &options.surface,
-        &mut t,
-        |_| {},
-        evaluate::curvature_surface(adaptive),
-    )?;
-    let jet = evaluate::jet_config(normals_from_file);
-    let out = evaluate::curvature(
-        &cloud.points,
-        &surface,
-        &options,
-        &jet,
-        &mls_pipeline::progress::NoProgress,
-    );
+        ..
+    } = run;
     Ok(Run {
         h: scale.h,
         source: normals_source,

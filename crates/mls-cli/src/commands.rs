@@ -8,8 +8,8 @@ use mls_cli::progress;
 use mls_core::{AdaptiveConfig, Frame, Parallelism, Point};
 use mls_io::Column;
 use mls_pipeline::evaluate::{self, vector_columns};
-use mls_pipeline::pipeline::{self, Built, Carried, Prepared, Timings};
-use mls_pipeline::{At, CurvatureOptions, Method};
+use mls_pipeline::pipeline::{self, Built, Carried, Loaded, Prepared, Timings};
+use mls_pipeline::{At, Cloud, CurvatureOptions, CurvatureRun, Method};
 
 use crate::{CurvatureArgs, EvalArgs, NormalsArgs, OutputArgs, ProjectArgs, interactive};
 
@@ -44,34 +44,41 @@ pub fn curvature(a: CurvatureArgs) -> Result<()> {
     }
     pipeline::with_threads(s.run.threads, || {
         let mut t = Timings::new(progress::on_stderr(interactive(s.run.quiet)));
-        let Prepared {
+        let Loaded {
             points,
-            built:
-                Built {
-                    scale,
-                    normals_source,
-                    normals_from_file,
-                    surface,
-                },
+            normals,
+            viewpoints,
             carried,
-        } = pipeline::prepare(
+        } = pipeline::load(
             &a.input,
             a.out.formats.input_format.map(Into::into),
             s.columns.as_ref(),
-            &options.surface,
             &mut t,
-            evaluate::curvature_surface(a.adaptive),
         )?;
+        // Before any work, as `normals` and the tiled run do: an attribute the output cannot
+        // hold.
         let mut carried = keep(carried, &a.out);
         carried.check(output.format(), &a.input)?;
-        let jet = evaluate::jet_config(normals_from_file);
+        let name = pipeline::input_name(&a.input);
         let n = points.len();
-        let progress = t.progress();
-        let mut out = t.measure(evaluate::curvature_label(options.at), || {
-            evaluate::curvature(&points, &surface, &options, &jet, &*progress)
-        });
-        // The surface's samples and tree are not needed for writing.
-        drop(surface);
+        let CurvatureRun {
+            columns: mut out,
+            scale,
+            normals_from_file,
+            normals_source,
+            jet,
+        } = mls_pipeline::curvature(
+            Cloud {
+                points: &points,
+                normals,
+                viewpoints: viewpoints.as_deref(),
+                name: &name,
+            },
+            &options,
+            &mut t,
+            pipeline::print_warning,
+        )?;
+        drop(viewpoints);
         pipeline::check_any_ok(
             &out.status,
             &pipeline::input_name(&a.input),

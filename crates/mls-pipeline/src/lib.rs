@@ -10,12 +10,14 @@
 //! Errors are `anyhow` chains whose one-line form (`{:#}`) is what `mlscurv` prints after
 //! `mlscurv: error:`; the Python package raises them with the same text.
 
+mod curvature;
 pub mod evaluate;
 pub mod output;
 pub mod pipeline;
 pub mod progress;
 pub mod tiled;
 
+pub use curvature::{Cloud, CurvatureRun, curvature, curvature_on};
 use mls_core::PointStatus;
 use mls_core::normals::Orientation;
 use mls_core::{Cutoff, Point};

@@ -2,9 +2,9 @@
 
 use mls_core::{Parallelism, Point};
 use mls_pipeline::evaluate::{self, CurvatureColumns};
-use mls_pipeline::pipeline::{self, Built, Timings};
+use mls_pipeline::pipeline::{self, Timings};
 use mls_pipeline::progress::NoProgress;
-use mls_pipeline::{CurvatureOptions, Method, NormalsMode, SurfaceOptions};
+use mls_pipeline::{Cloud, CurvatureOptions, CurvatureRun, Method, NormalsMode, SurfaceOptions};
 use numpy::PyArrayMethods;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
@@ -130,25 +130,22 @@ pub(crate) fn curvature<'py>(
             pipeline::with_threads(threads, || {
                 let mut t = Timings::default();
                 let mut warnings = Vec::new();
-                let Built {
+                let CurvatureRun {
+                    columns: out,
                     scale,
                     normals_source,
-                    normals_from_file,
-                    surface,
-                } = pipeline::build_surface(
-                    points,
-                    normals,
-                    None,
-                    POINTS,
-                    &options.surface,
+                    ..
+                } = mls_pipeline::curvature(
+                    Cloud {
+                        points,
+                        normals,
+                        viewpoints: None,
+                        name: POINTS,
+                    },
+                    &options,
                     &mut t,
                     |w| warnings.push(w),
-                    evaluate::curvature_surface(options.adaptive),
                 )?;
-                let jet = evaluate::jet_config(normals_from_file);
-                let out = t.time(evaluate::curvature_label(options.at), || {
-                    evaluate::curvature(points, &surface, &options, &jet, &NoProgress)
-                });
                 let summary = Summary {
                     scale,
                     normals_source,

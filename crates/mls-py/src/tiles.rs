@@ -432,8 +432,6 @@ pub(crate) fn _tile_curvature<'py>(
         )));
     }
     let from_file = normals.is_some();
-    let jet =
-        (options.method == Method::Jet).then(|| mls_pipeline::evaluate::jet_config(from_file));
     let frame = Frame::of_box(vector(lo), vector(hi));
     let (result, timings) = py
         .detach(|| {
@@ -448,7 +446,6 @@ pub(crate) fn _tile_curvature<'py>(
                         orientation,
                         frame,
                         &options,
-                        jet.as_ref(),
                         name,
                     )
                 })?;

@@ -19,8 +19,8 @@ use mls_core::PointStatus;
 use crate::progress::{NoProgress, Progress};
 
 pub use self::build::{
-    BuildSurface, Built, Prepared, Surface, build_surface, eval_surface, fixed_surface, index,
-    prepare, surface, surface_in,
+    BuildSurface, Built, Loaded, Prepared, Surface, build_surface, eval_surface, fixed_surface,
+    index, load, prepare, surface, surface_in,
 };
 pub(crate) use self::input::is_stdio;
 pub use self::input::{

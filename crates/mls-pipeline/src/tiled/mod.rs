@@ -394,7 +394,6 @@ pub fn curvature(run: &TiledRun<'_>, t: &mut Timings) -> Result<TiledSummary> {
                 s.orient.is_none(),
                 frame,
                 options,
-                jet.as_ref(),
                 &name,
             )?;
             if normals_source.is_empty() {
