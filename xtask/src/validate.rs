@@ -225,17 +225,17 @@ const ROWS: [Row; 44] = [
     row(
         "oriented normals outward (sphere, ellipsoid, torus, box; share facing in)",
         0.0,
-        "`mls_cli::pipeline::normals` (estimated, default orientation) / n·∇f > 0, f the shape's implicit function (the box: its face's normal, 3 spacings from the edges)",
+        "`mls_pipeline::pipeline::normals` (estimated, default orientation) / n·∇f > 0, f the shape's implicit function (the box: its face's normal, 3 spacings from the edges)",
     ),
     row(
         "oriented normals up or towards the viewpoint (height fields; share facing away)",
         0.0,
-        "`mls_cli::pipeline::normals` (default: up for a sheet seen from above; `--orient viewpoint`) / the height field's upper side",
+        "`mls_pipeline::pipeline::normals` (default: up for a sheet seen from above; `--orient viewpoint`) / the height field's upper side",
     ),
     row(
         "neighbour pairs that agree, as the summary prints it",
         0.0,
-        "`mls_cli::pipeline::normals`'s summary / `mls_ad::pair_agreement` (16 nearest by brute force, the 60° and 15° rules)",
+        "`mls_pipeline::pipeline::normals`'s summary / `mls_ad::pair_agreement` (16 nearest by brute force, the 60° and 15° rules)",
     ),
     row(
         "n, g, k1, k2 at queries spread wider than the support (per query)",
@@ -270,7 +270,7 @@ const ROWS: [Row; 44] = [
     row(
         "end to end: tiled k1, k2, n (1 for a single tile or h beyond 5 % of the rule's)",
         THRESHOLD,
-        "`mls_cli::tiled::curvature` (`--memory 66MiB` on a LAS file) / `mls_ad::jet_candidates`, `mls_ad::classify`",
+        "`mls_pipeline::tiled::curvature` (`--memory 66MiB` on a LAS file) / `mls_ad::jet_candidates`, `mls_ad::classify`",
     ),
     row(
         "end to end: status (1 where the witness's differs)",

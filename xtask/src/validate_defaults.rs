@@ -206,13 +206,13 @@ pub(crate) fn defaults() -> Vec<Documented> {
         ),
         field(
             "pipeline::MIN_FILE_CONSISTENCY",
-            mls_cli::pipeline::MIN_FILE_CONSISTENCY,
+            mls_pipeline::pipeline::MIN_FILE_CONSISTENCY,
             doc::MIN_CONSISTENCY,
             "README.md --normals, docs/orientation.md \"Normals from a file\"",
         ),
         field(
             "pipeline::MIN_ESTIMATED_CONSISTENCY",
-            mls_cli::pipeline::MIN_ESTIMATED_CONSISTENCY,
+            mls_pipeline::pipeline::MIN_ESTIMATED_CONSISTENCY,
             doc::MIN_CONSISTENCY,
             "README.md (estimated normals below 99 %), docs/orientation.md",
         ),
@@ -235,8 +235,8 @@ pub(crate) fn defaults() -> Vec<Documented> {
             "README.md --cutoff",
         ),
         field(
-            "mls_cli::DEFAULT_CUTOFF (--cutoff's default on the command line)",
-            mls_cli::parse_cutoff(mls_cli::DEFAULT_CUTOFF)
+            "mls_pipeline::DEFAULT_CUTOFF (--cutoff's default on the command line)",
+            mls_pipeline::parse_cutoff(mls_pipeline::DEFAULT_CUTOFF)
                 .ok()
                 .and_then(radius),
             Some(doc::CUTOFF),

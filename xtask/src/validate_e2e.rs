@@ -1,7 +1,7 @@
 //! The end-to-end rows of `cargo xtask validate`: `mlscurv curvature` through its library entry
-//! (`mls_cli::pipeline::build_surface`, `mls_cli::evaluate::jet_config` and
-//! `mls_cli::evaluate::curvature`, the three calls the binary and the Python package make; the
-//! tiled run through `mls_cli::tiled::curvature` on a LAS file) on generated clouds and the
+//! (`mls_pipeline::curvature`, the call the binary and the Python package make: the surface,
+//! the jet's configuration, the evaluation; the tiled run through
+//! `mls_pipeline::tiled::curvature` on a LAS file) on generated clouds and the
 //! bundled bunny, for the combinations users reach, against an independent pipeline assembled
 //! from the witnesses of mls-ad: its own h (`mls_ad::spacing_witness` with the documented
 //! rule), its own normals (the file's as they are; or `mls_ad::normal_witness` oriented by the
@@ -15,10 +15,10 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
 use mls_ad::documented as doc;
-use mls_cli::evaluate::{self, CurvatureColumns};
-use mls_cli::pipeline::{self, Built, Timings};
-use mls_cli::{At, CurvatureOptions, Method, NormalsMode, SurfaceOptions};
 use mls_core::{NormalData, Point, PointStatus, Sample, Vector};
+use mls_pipeline::evaluate::CurvatureColumns;
+use mls_pipeline::pipeline::{self, Timings};
+use mls_pipeline::{At, CurvatureOptions, CurvatureRun, Method, NormalsMode, SurfaceOptions};
 use mls_shapes::{Ellipsoid, HeightField, HeightFieldConfig, Sphere, Torus, random_area_uniform};
 use nalgebra::Vector3;
 use rand::seq::index::sample;
@@ -86,7 +86,8 @@ fn command(cloud: &Cloud, method: Method, at: At, adaptive: bool) -> Result<Run>
         surface: SurfaceOptions {
             h: None,
             h_factor: mls_core::normals::DEFAULT_H_FACTOR,
-            cutoff: mls_cli::parse_cutoff(mls_cli::DEFAULT_CUTOFF).map_err(anyhow::Error::msg)?,
+            cutoff: mls_pipeline::parse_cutoff(mls_pipeline::DEFAULT_CUTOFF)
+                .map_err(anyhow::Error::msg)?,
             normals: NormalsMode::Auto,
             orient: None,
         },
@@ -94,24 +95,24 @@ fn command(cloud: &Cloud, method: Method, at: At, adaptive: bool) -> Result<Run>
         at,
         adaptive,
     };
-    let mut t = Timings::default();
-    let Built {
+    let run = mls_pipeline::curvature(
+        mls_pipeline::Cloud {
+            points: &cloud.points,
+            normals: cloud.file_normals.clone(),
+            viewpoints: None,
+            name: &cloud.name,
+        },
+        &options,
+        &mut Timings::default(),
+        |_| {},
+    )?;
+    let CurvatureRun {
+        columns: out,
         scale,
         normals_source,
         normals_from_file,
-        surface,
-    } = pipeline::build_surface(
-        &cloud.points,
-        cloud.file_normals.clone(),
-        None,
-        &cloud.name,
-        &options.surface,
-        &mut t,
-        |_| {},
-        evaluate::curvature_surface(adaptive),
-    )?;
-    let jet = evaluate::jet_config(normals_from_file);
-    let out = evaluate::curvature(&cloud.points, &surface, &options, &jet, false);
+        ..
+    } = run;
     Ok(Run {
         h: scale.h,
         source: normals_source,
@@ -803,7 +804,7 @@ fn sheet_las(n: usize, file: bool, rng_seed: u64, dir: &Path) -> Result<(Cloud, 
     ))
 }
 
-/// The tiled run (`mls_cli::tiled::curvature`, as `mlscurv curvature --memory 66MiB` on a
+/// The tiled run (`mls_pipeline::tiled::curvature`, as `mlscurv curvature --memory 66MiB` on a
 /// LAS file too large for that budget) against the witness at a sample of its points.
 fn check_tiled(
     tally: &mut Tally,
@@ -825,7 +826,8 @@ fn check_tiled(
         surface: SurfaceOptions {
             h: None,
             h_factor: mls_core::normals::DEFAULT_H_FACTOR,
-            cutoff: mls_cli::parse_cutoff(mls_cli::DEFAULT_CUTOFF).map_err(anyhow::Error::msg)?,
+            cutoff: mls_pipeline::parse_cutoff(mls_pipeline::DEFAULT_CUTOFF)
+                .map_err(anyhow::Error::msg)?,
             normals: NormalsMode::Auto,
             orient: None,
         },
@@ -833,7 +835,7 @@ fn check_tiled(
         at: At::Input,
         adaptive: false,
     };
-    let run = mls_cli::tiled::TiledRun {
+    let run = mls_pipeline::tiled::TiledRun {
         input: &input,
         input_format: mls_io::FileFormat::Las,
         columns: None,
@@ -845,7 +847,7 @@ fn check_tiled(
         temp_dir: Some(dir),
         keep_attributes: false,
     };
-    let summary = mls_cli::tiled::curvature(&run, &mut Timings::default())?;
+    let summary = mls_pipeline::tiled::curvature(&run, &mut Timings::default())?;
     let label = format!(
         "tiled, {} tiles within 66 MiB, {}",
         summary.tiles,

@@ -39,7 +39,7 @@ pub(crate) fn compare_jets(
     } else {
         NormalData::Ignore
     };
-    // Production with the defaults (as the command: `mls_cli::evaluate::jet_config`), the
+    // Production with the defaults (as the command: `mls_pipeline::evaluate::jet_config`), the
     // witness with the documented values.
     let config = JetConfig {
         normals,

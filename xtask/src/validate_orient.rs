@@ -1,5 +1,5 @@
 //! The orientation rows of `cargo xtask validate`: normals estimated and oriented through the
-//! command's own library entry (`mls_cli::pipeline`: the index, h from the spacing with the
+//! command's own library entry (`mls_pipeline::pipeline`: the index, h from the spacing with the
 //! default factor, `normals` with `--normals estimate` and the command's `--orient`) on noisy,
 //! irregular samples of closed analytic shapes and of height fields, without their normals,
 //! checked against the shapes' geometry, and the summary's share of neighbour pairs that agree
@@ -8,9 +8,9 @@
 use std::fmt::Write as _;
 
 use anyhow::Result;
-use mls_cli::NormalsMode;
 use mls_core::normals::{DEFAULT_H_FACTOR, Orientation};
 use mls_core::{Frame, Parallelism, Point, Vector};
+use mls_pipeline::NormalsMode;
 use mls_shapes::{Ellipsoid, HeightField, HeightFieldConfig, Sphere, Torus, random_area_uniform};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -253,7 +253,7 @@ pub(crate) fn printed_agreement(source: &str) -> Option<&str> {
 /// report's table.
 pub(crate) fn check_orientation(tally: &mut Tally, base_seed: u64, cases: usize) -> Result<String> {
     let mut table = String::from(
-        "\nOrientation (estimated normals through `mls_cli::pipeline::normals`, as `mlscurv \
+        "\nOrientation (estimated normals through `mls_pipeline::pipeline::normals`, as `mlscurv \
          curvature` without file normals; per cloud):\n\n\
          | cloud | orientation (the summary) | decisive normals | facing the wrong way | pairs agree, printed | recount (`mls_ad::pair_agreement`) |\n\
          | --- | --- | --- | --- | --- | --- |\n",
@@ -265,9 +265,10 @@ pub(crate) fn check_orientation(tally: &mut Tally, base_seed: u64, cases: usize)
         let shape = SHAPES[c % SHAPES.len()];
         let cloud = cloud(shape, &mut rng);
         let name = format!("{} (seed {seed:#x})", cloud.name);
-        let index = mls_cli::pipeline::index(&cloud.points, Frame::of(&cloud.points), &name)?;
-        let scale = mls_cli::pipeline::choose_h_on(&index, None, DEFAULT_H_FACTOR, par, &name)?;
-        let normals = mls_cli::pipeline::normals(
+        let index = mls_pipeline::pipeline::index(&cloud.points, Frame::of(&cloud.points), &name)?;
+        let scale =
+            mls_pipeline::pipeline::choose_h_on(&index, None, DEFAULT_H_FACTOR, par, &name)?;
+        let normals = mls_pipeline::pipeline::normals(
             None,
             &cloud.points,
             Some(&index),

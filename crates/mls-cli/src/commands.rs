@@ -4,11 +4,12 @@
 use std::path::Path;
 
 use anyhow::Result;
-use mls_cli::evaluate::{self, vector_columns};
-use mls_cli::pipeline::{self, Built, Carried, Prepared, Timings};
-use mls_cli::{At, CurvatureOptions, Method};
+use mls_cli::progress;
 use mls_core::{AdaptiveConfig, Frame, Parallelism, Point};
 use mls_io::Column;
+use mls_pipeline::evaluate::{self, vector_columns};
+use mls_pipeline::pipeline::{self, Built, Carried, Loaded, Prepared, Timings};
+use mls_pipeline::{At, Cloud, CurvatureOptions, CurvatureRun, Method};
 
 use crate::{CurvatureArgs, EvalArgs, NormalsArgs, OutputArgs, ProjectArgs, interactive};
 
@@ -17,7 +18,7 @@ fn output(inputs: &[&Path], out: &OutputArgs) -> Result<pipeline::Output> {
     pipeline::check_output(
         inputs,
         &out.output,
-        out.formats.output_format,
+        out.formats.output_format.map(Into::into),
         out.force,
         out.ascii,
         None,
@@ -26,51 +27,58 @@ fn output(inputs: &[&Path], out: &OutputArgs) -> Result<pipeline::Output> {
 
 pub fn curvature(a: CurvatureArgs) -> Result<()> {
     let output = output(&[&a.input], &a.out)?;
-    if a.adaptive && a.method == Method::Jet {
-        anyhow::bail!("{}", mls_cli::ADAPTIVE_NEEDS_PAPER);
-    }
     let s = &a.surface;
     let options = CurvatureOptions {
         surface: s.options(),
-        method: a.method,
-        at: a.at,
+        method: a.method.into(),
+        at: a.at.into(),
         adaptive: a.adaptive,
     };
+    if options.adaptive && options.method == Method::Jet {
+        anyhow::bail!("{}", mls_pipeline::ADAPTIVE_NEEDS_PAPER);
+    }
     if let Some((budget, format)) = tiled_budget(&a, &output)? {
         return pipeline::with_threads(s.run.threads, || {
             curvature_tiled(&a, &options, &output, budget, format)
         });
     }
     pipeline::with_threads(s.run.threads, || {
-        let mut t = Timings::new(interactive(s.run.quiet));
-        let Prepared {
+        let mut t = Timings::new(progress::on_stderr(interactive(s.run.quiet)));
+        let Loaded {
             points,
-            built:
-                Built {
-                    scale,
-                    normals_source,
-                    normals_from_file,
-                    surface,
-                },
+            normals,
+            viewpoints,
             carried,
-        } = pipeline::prepare(
+        } = pipeline::load(
             &a.input,
-            a.out.formats.input_format,
+            a.out.formats.input_format.map(Into::into),
             s.columns.as_ref(),
-            &options.surface,
             &mut t,
-            evaluate::curvature_surface(a.adaptive),
         )?;
+        // Before any work, as `normals` and the tiled run do: an attribute the output cannot
+        // hold.
         let mut carried = keep(carried, &a.out);
         carried.check(output.format(), &a.input)?;
-        let jet = evaluate::jet_config(normals_from_file);
+        let name = pipeline::input_name(&a.input);
         let n = points.len();
-        let show = t.show();
-        let mut out = t.measure(evaluate::curvature_label(a.at), || {
-            evaluate::curvature(&points, &surface, &options, &jet, show)
-        });
-        // The surface's samples and tree are not needed for writing.
-        drop(surface);
+        let CurvatureRun {
+            columns: mut out,
+            scale,
+            normals_from_file,
+            normals_source,
+            jet,
+        } = mls_pipeline::curvature(
+            Cloud {
+                points: &points,
+                normals,
+                viewpoints: viewpoints.as_deref(),
+                name: &name,
+            },
+            &options,
+            &mut t,
+            pipeline::print_warning,
+        )?;
+        drop(viewpoints);
         pipeline::check_any_ok(
             &out.status,
             &pipeline::input_name(&a.input),
@@ -103,7 +111,7 @@ pub fn curvature(a: CurvatureArgs) -> Result<()> {
             } else {
                 eprintln!("  h               {}", scale.describe(H_OPTIONS));
             }
-            match a.method {
+            match options.method {
                 Method::Jet => eprintln!(
                     "  method          jet: weighted degree-{} fit, support {}{}h to {:.1}h{} chosen per point; normals {}",
                     jet.degree,
@@ -136,7 +144,7 @@ pub fn curvature(a: CurvatureArgs) -> Result<()> {
             eprintln!("  normals         {normals_source}");
             eprintln!(
                 "  evaluated at    {}",
-                if a.at == At::Input {
+                if options.at == At::Input {
                     "input points"
                 } else {
                     "projected points"
@@ -147,7 +155,7 @@ pub fn curvature(a: CurvatureArgs) -> Result<()> {
             eprintln!("  k2              {}", pipeline::percentiles(&out.k2));
             eprintln!("  mean            {}", pipeline::percentiles(&out.mean));
             eprintln!("  gauss           {}", pipeline::percentiles(&out.gauss));
-            if a.method == Method::Jet {
+            if options.method == Method::Jet {
                 eprintln!("  k1 predicted sd {}", pipeline::percentiles(&out.k1_sd));
             }
             print_timings(&t, n, "points");
@@ -171,7 +179,7 @@ fn tiled_budget(
             anyhow::bail!(
                 "{name}: --memory {}: standard input is read whole and its size is not known \
                  before; give the file's path to have it evaluated in tiles",
-                mls_cli::tiled::describe_size(budget)
+                mls_pipeline::tiled::describe_size(budget)
             );
         }
         return Ok(None);
@@ -188,7 +196,7 @@ fn tiled_budget(
     };
     let (budget, given) = match a.memory {
         Some(b) => (b, true),
-        None => match mls_cli::tiled::available_memory() {
+        None => match mls_pipeline::tiled::available_memory() {
             Some(m) => (m / 5 * 4, false),
             None => return Ok(None),
         },
@@ -198,7 +206,7 @@ fn tiled_budget(
     if matches!(format, FileFormat::Xyz | FileFormat::Csv)
         && let Ok(meta) = std::fs::metadata(&a.input)
         && !given
-        && mls_cli::tiled::fits_in_memory(meta.len() / 6, budget)
+        && mls_pipeline::tiled::fits_in_memory(meta.len() / 6, budget)
     {
         return Ok(None);
     }
@@ -206,14 +214,14 @@ fn tiled_budget(
         FileFormat::Las | FileFormat::Laz => mls_io::LasReader::open(&a.input)?.len(),
         _ => mls_io::point_count(&a.input, format)?,
     };
-    let need = mls_cli::tiled::in_memory_bytes(points);
-    if mls_cli::tiled::fits_in_memory(points, budget) {
+    let need = mls_pipeline::tiled::in_memory_bytes(points);
+    if mls_pipeline::tiled::fits_in_memory(points, budget) {
         if given && !a.surface.run.quiet {
             eprintln!(
                 "mlscurv: note: {name}: {points} points need about {}, within --memory {}: \
                  evaluating in memory",
-                mls_cli::tiled::describe_size(need),
-                mls_cli::tiled::describe_size(budget)
+                mls_pipeline::tiled::describe_size(need),
+                mls_pipeline::tiled::describe_size(budget)
             );
         }
         return Ok(None);
@@ -222,15 +230,15 @@ fn tiled_budget(
         anyhow::bail!(
             "{name}: {points} points do not fit in {} of memory and are evaluated in tiles, \
              whose output must be a file",
-            mls_cli::tiled::describe_size(budget)
+            mls_pipeline::tiled::describe_size(budget)
         );
     }
     if !a.surface.run.quiet {
         eprintln!(
             "mlscurv: note: {name}: {points} points need about {}, more than {}{}: \
              evaluating in tiles",
-            mls_cli::tiled::describe_size(need),
-            mls_cli::tiled::describe_size(budget),
+            mls_pipeline::tiled::describe_size(need),
+            mls_pipeline::tiled::describe_size(budget),
             if given {
                 " (--memory)"
             } else {
@@ -252,8 +260,8 @@ fn curvature_tiled(
     let pipeline::Output::File(path, format) = output else {
         anyhow::bail!("a tiled run writes a file");
     };
-    let mut t = Timings::new(interactive(s.run.quiet));
-    let run = mls_cli::tiled::TiledRun {
+    let mut t = Timings::new(progress::on_stderr(interactive(s.run.quiet)));
+    let run = mls_pipeline::tiled::TiledRun {
         input: &a.input,
         input_format,
         columns: s.columns.as_ref(),
@@ -265,7 +273,7 @@ fn curvature_tiled(
         temp_dir: a.temp_dir.as_deref(),
         keep_attributes: !a.out.no_attributes,
     };
-    let r = mls_cli::tiled::curvature(&run, &mut t)?;
+    let r = mls_pipeline::tiled::curvature(&run, &mut t)?;
     if !s.run.quiet {
         eprintln!("mlscurv curvature: {}", pipeline::input_name(&a.input));
         eprintln!("  points read     {}", r.points);
@@ -290,7 +298,7 @@ fn curvature_tiled(
         eprintln!("  k2              {}", pipeline::percentiles(&r.k2));
         eprintln!("  mean            {}", pipeline::percentiles(&r.mean));
         eprintln!("  gauss           {}", pipeline::percentiles(&r.gauss));
-        if a.method == Method::Jet {
+        if options.method == Method::Jet {
             eprintln!("  k1 predicted sd {}", pipeline::percentiles(&r.k1_sd));
         }
         print_timings(&t, r.points as usize, "points");
@@ -343,7 +351,7 @@ pub fn eval(a: EvalArgs) -> Result<()> {
         Some(path) => pipeline::check_output(
             &[&a.cloud, &a.queries],
             path,
-            a.formats.output_format,
+            a.formats.output_format.map(Into::into),
             a.force,
             false,
             None,
@@ -377,10 +385,14 @@ pub fn eval(a: EvalArgs) -> Result<()> {
 }
 
 fn eval_with(a: &EvalArgs, output: &pipeline::Output) -> Result<()> {
-    let mut t = Timings::new(interactive(a.run.quiet));
+    let mut t = Timings::new(progress::on_stderr(interactive(a.run.quiet)));
     let cloud_name = pipeline::input_name(&a.cloud);
     let cloud = t.time("read", || {
-        pipeline::read(&a.cloud, a.formats.input_format, a.columns.as_ref())
+        pipeline::read(
+            &a.cloud,
+            a.formats.input_format.map(Into::into),
+            a.columns.as_ref(),
+        )
     })?;
     let Some(file_normals) = &cloud.normals else {
         anyhow::bail!(
@@ -388,7 +400,7 @@ fn eval_with(a: &EvalArgs, output: &pipeline::Output) -> Result<()> {
         );
     };
     let queries = t.time("read queries", || {
-        pipeline::read_quietly(&a.queries, a.formats.input_format)
+        pipeline::read_quietly(&a.queries, a.formats.input_format.map(Into::into))
     })?;
     let points = pipeline::to_points(&cloud);
     let (scale, surface) = pipeline::eval_surface(
@@ -429,10 +441,14 @@ fn eval_with(a: &EvalArgs, output: &pipeline::Output) -> Result<()> {
 pub fn normals(a: NormalsArgs) -> Result<()> {
     let output = output(&[&a.input], &a.out)?;
     pipeline::with_threads(a.run.threads, || {
-        let mut t = Timings::new(interactive(a.run.quiet));
+        let mut t = Timings::new(progress::on_stderr(interactive(a.run.quiet)));
         let par = Parallelism::Rayon;
         let mut cloud = t.time("read", || {
-            pipeline::read(&a.input, a.out.formats.input_format, a.columns.as_ref())
+            pipeline::read(
+                &a.input,
+                a.out.formats.input_format.map(Into::into),
+                a.columns.as_ref(),
+            )
         })?;
         let mut carried = Carried::new(
             std::mem::take(&mut cloud.attributes),
@@ -455,7 +471,7 @@ pub fn normals(a: NormalsArgs) -> Result<()> {
                 None,
                 &points,
                 Some(&index),
-                mls_cli::NormalsMode::Estimate,
+                mls_pipeline::NormalsMode::Estimate,
                 a.orient,
                 viewpoints.as_deref(),
                 scale.h,
@@ -506,7 +522,7 @@ pub fn project(a: ProjectArgs) -> Result<()> {
     let output = output(&[&a.input], &a.out)?;
     let s = &a.surface;
     pipeline::with_threads(s.run.threads, || {
-        let mut t = Timings::new(interactive(s.run.quiet));
+        let mut t = Timings::new(progress::on_stderr(interactive(s.run.quiet)));
         let Prepared {
             points,
             built:
@@ -519,7 +535,7 @@ pub fn project(a: ProjectArgs) -> Result<()> {
             carried,
         } = pipeline::prepare(
             &a.input,
-            a.out.formats.input_format,
+            a.out.formats.input_format.map(Into::into),
             s.columns.as_ref(),
             &s.options(),
             &mut t,
@@ -528,9 +544,9 @@ pub fn project(a: ProjectArgs) -> Result<()> {
         let mut carried = keep(carried, &a.out);
         carried.check(output.format(), &a.input)?;
         let n = points.len();
-        let show = t.show();
+        let progress = t.progress();
         let out = t.measure("projection", || {
-            evaluate::projection(&points, &surface, show)
+            evaluate::projection(&points, &surface, &*progress)
         });
         drop(surface);
         drop(points);

@@ -6,7 +6,7 @@ use anyhow::{Context as _, Result, anyhow};
 use mls_core::normals::{DEFAULT_NEIGHBOURS, NeighbourGraph, orientation_consistency};
 use mls_core::{IndexedCloud, Parallelism, Vector};
 
-use mls_cli::pipeline::{self, Length};
+use mls_pipeline::pipeline::{self, Length};
 
 use crate::InfoArgs;
 
@@ -26,7 +26,7 @@ fn info_report(a: &InfoArgs, out: &mut String) -> Result<()> {
             let _ = writeln!(out, $($arg)*);
         }};
     }
-    let cloud = pipeline::read_any(&a.input, a.input_format, a.columns.as_ref())?;
+    let cloud = pipeline::read_any(&a.input, a.input_format.map(Into::into), a.columns.as_ref())?;
     let points = pipeline::to_points(&cloud);
     println!("file            {}", pipeline::input_name(&a.input));
     println!("points          {}", points.len());

@@ -6,7 +6,8 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use clap::{ArgAction, Args, CommandFactory as _, FromArgMatches as _, Subcommand};
-use mls_cli::{At, Format, Method, NormalsMode, parse_cutoff, parse_orient, positive_finite};
+use mls_cli::{AtArg, Format, MethodArg, NormalsArg};
+use mls_pipeline::{parse_cutoff, parse_orient, positive_finite};
 
 mod commands;
 mod info;
@@ -86,11 +87,11 @@ struct SurfaceArgs {
     #[command(flatten)]
     scale: ScaleArgs,
     /// Kernel cutoff radius in units of h (at least 2), or `none` for the untruncated kernel.
-    #[arg(long, value_parser = parse_cutoff, default_value = mls_cli::DEFAULT_CUTOFF, allow_negative_numbers = true)]
+    #[arg(long, value_parser = parse_cutoff, default_value = mls_pipeline::DEFAULT_CUTOFF, allow_negative_numbers = true)]
     cutoff: mls_core::Cutoff,
     /// Where normals come from.
-    #[arg(long, value_enum, default_value_t = NormalsMode::Auto)]
-    normals: NormalsMode,
+    #[arg(long, value_enum, default_value_t = NormalsArg::Auto)]
+    normals: NormalsArg,
     /// Orientation of estimated normals: `mst` (outward, by minimum spanning tree),
     /// `viewpoint:X,Y,Z` (towards a scanner position), `up` (positive z, for airborne scans),
     /// or `none`. `viewpoint` and `up` decide each smooth patch by a vote of its points.
@@ -108,12 +109,12 @@ struct SurfaceArgs {
 
 impl SurfaceArgs {
     /// The options that shape the surface, for the library's pipeline.
-    fn options(&self) -> mls_cli::SurfaceOptions {
-        mls_cli::SurfaceOptions {
+    fn options(&self) -> mls_pipeline::SurfaceOptions {
+        mls_pipeline::SurfaceOptions {
             h: self.scale.h,
             h_factor: self.scale.h_factor,
             cutoff: self.cutoff,
-            normals: self.normals,
+            normals: self.normals.into(),
             orient: self.orient,
         }
     }
@@ -170,12 +171,12 @@ struct CurvatureArgs {
     #[command(flatten)]
     surface: SurfaceArgs,
     /// The estimator: `jet` (default) or `paper` (the closed-form MLS surface).
-    #[arg(long, value_enum, default_value_t = Method::Jet)]
-    method: Method,
+    #[arg(long, value_enum, default_value_t = MethodArg::Jet)]
+    method: MethodArg,
     /// Evaluate at the input points or at their projections onto the surface (the MLS
     /// surface for `--method paper`, the fitted jet for `--method jet`).
-    #[arg(long, value_enum, default_value_t = At::Input)]
-    at: At,
+    #[arg(long, value_enum, default_value_t = AtArg::Input)]
+    at: AtArg,
     /// Choose h per point: from the scale given by --h or --h-factor up to 4 times it, the
     /// largest scale whose estimate agrees with the smaller ones within the local noise, with
     /// the h² bias extrapolated away. Adds the columns `h` and `noise`. For noisy scans; on
@@ -189,7 +190,7 @@ struct CurvatureArgs {
     /// temporary files, with the results of one whole run (bitwise with the file's normals and
     /// a given --h), written to a file in any output format. Default: the machine's available
     /// memory, less a fifth. Refused for standard input, which is read whole.
-    #[arg(long, value_parser = mls_cli::tiled::parse_size)]
+    #[arg(long, value_parser = mls_pipeline::tiled::parse_size)]
     memory: Option<u64>,
     /// Directory for the temporary tiles of a tiled run (default: the output's directory).
     #[arg(long)]
@@ -212,7 +213,7 @@ struct EvalArgs {
     #[arg(long, value_parser = positive_finite, allow_negative_numbers = true)]
     h: Option<f64>,
     /// Kernel cutoff radius in units of h, or `none`.
-    #[arg(long, value_parser = parse_cutoff, default_value = mls_cli::DEFAULT_CUTOFF, allow_negative_numbers = true)]
+    #[arg(long, value_parser = parse_cutoff, default_value = mls_pipeline::DEFAULT_CUTOFF, allow_negative_numbers = true)]
     cutoff: mls_core::Cutoff,
     /// Output file (.csv, .ply, .xyz/.txt/.pts/.asc, .las/.laz, by extension); standard output (CSV unless
     /// --output-format) when absent or `-`.

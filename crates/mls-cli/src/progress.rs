@@ -1,15 +1,35 @@
-//! Progress on stderr: a bar over the evaluation, a spinner over the other stages. Drawn only
-//! when the caller says so (stderr a terminal and no `--quiet`).
+//! Progress on stderr: a bar over the evaluation, a spinner over the other stages, drawn for
+//! the library's [`Progress`] only when the caller says so (stderr a terminal and no
+//! `--quiet`).
 
+use std::sync::Arc;
 use std::time::Duration;
 
 use indicatif::{ProgressBar, ProgressStyle};
+use mls_pipeline::progress::{Meter, NoProgress, Progress};
 
-/// The evaluation's chunk: how often the bar moves, and how many full per-point results (about
-/// 1.2 KB a point while mls-core collects them, 19 MB here) are held at a time: at 65,536 they
-/// were 77 MB, a quarter of the command's peak on a million points. The results do not depend
-/// on it (see `mls_core::stream`).
-pub const CHUNK: usize = mls_core::DEFAULT_CHUNK;
+/// The progress of a command: bars and spinners on stderr if `show`, else none.
+pub fn on_stderr(show: bool) -> Arc<dyn Progress> {
+    if show {
+        Arc::new(Stderr)
+    } else {
+        Arc::new(NoProgress)
+    }
+}
+
+/// Bars and spinners on stderr.
+#[derive(Clone, Copy, Debug)]
+pub struct Stderr;
+
+impl Progress for Stderr {
+    fn bar(&self, n: usize, label: &str) -> Box<dyn Meter> {
+        Box::new(Bar::new(n, label, true))
+    }
+
+    fn stage(&self, label: &str) -> Box<dyn Meter> {
+        Box::new(Spinner::new(label, true))
+    }
+}
 
 /// A bar over `n` points, moved at each chunk and cleared when dropped; nothing unless `show`.
 /// A single chunk still gets its bar: the slow estimators take seconds for one.
@@ -28,9 +48,11 @@ impl Bar {
             bar
         }))
     }
+}
 
+impl Meter for Bar {
     /// Marks the first `done` points as finished.
-    pub fn set(&self, done: usize) {
+    fn set(&self, done: usize) {
         if let Some(bar) = &self.0 {
             bar.set_position(done as u64);
         }
@@ -62,6 +84,8 @@ impl Spinner {
         }))
     }
 }
+
+impl Meter for Spinner {}
 
 impl Drop for Spinner {
     fn drop(&mut self) {

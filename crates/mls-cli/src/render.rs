@@ -333,5 +333,5 @@ fn check_output(input: &Path, output: &Path, force: bool) -> Result<()> {
     if existing.as_ref().is_some_and(std::fs::Metadata::is_dir) {
         bail!("{name}: is a directory; expected an output file name");
     }
-    mls_cli::output::check_replaceable(output, existing.as_ref(), force)
+    mls_pipeline::output::check_replaceable(output, existing.as_ref(), force)
 }

@@ -3,8 +3,8 @@
 
 use std::path::PathBuf;
 
-use mls_cli::pipeline;
 use mls_io::{AttributeData, Axis, Column, ColumnNames, ReadError, ReadOptions, WriteError};
+use mls_pipeline::pipeline;
 use numpy::{PyArray1, PyArrayMethods};
 use pyo3::exceptions::{
     PyFileNotFoundError, PyIsADirectoryError, PyOSError, PyPermissionError, PyTypeError,

@@ -1,9 +1,10 @@
-//! `curvature`, `normals` and `project`: the commands' steps through `mls_cli` on arrays.
+//! `curvature`, `normals` and `project`: the commands' steps through `mls_pipeline` on arrays.
 
-use mls_cli::evaluate::{self, CurvatureColumns};
-use mls_cli::pipeline::{self, Built, Timings};
-use mls_cli::{CurvatureOptions, Method, NormalsMode, SurfaceOptions};
 use mls_core::{Parallelism, Point};
+use mls_pipeline::evaluate::{self, CurvatureColumns};
+use mls_pipeline::pipeline::{self, Timings};
+use mls_pipeline::progress::NoProgress;
+use mls_pipeline::{Cloud, CurvatureOptions, CurvatureRun, Method, NormalsMode, SurfaceOptions};
 use numpy::PyArrayMethods;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
@@ -118,7 +119,7 @@ pub(crate) fn curvature<'py>(
     };
     let threads = crate::threads(threads)?;
     if options.adaptive && options.method == Method::Jet {
-        return Err(PyValueError::new_err(mls_cli::ADAPTIVE_NEEDS_PAPER));
+        return Err(PyValueError::new_err(mls_pipeline::ADAPTIVE_NEEDS_PAPER));
     }
     let Input { array, normals } = Input::new(points, normals)?;
     let readonly = array.readonly();
@@ -129,25 +130,22 @@ pub(crate) fn curvature<'py>(
             pipeline::with_threads(threads, || {
                 let mut t = Timings::default();
                 let mut warnings = Vec::new();
-                let Built {
+                let CurvatureRun {
+                    columns: out,
                     scale,
                     normals_source,
-                    normals_from_file,
-                    surface,
-                } = pipeline::build_surface(
-                    points,
-                    normals,
-                    None,
-                    POINTS,
-                    &options.surface,
+                    ..
+                } = mls_pipeline::curvature(
+                    Cloud {
+                        points,
+                        normals,
+                        viewpoints: None,
+                        name: POINTS,
+                    },
+                    &options,
                     &mut t,
                     |w| warnings.push(w),
-                    evaluate::curvature_surface(options.adaptive),
                 )?;
-                let jet = evaluate::jet_config(normals_from_file);
-                let out = t.time(evaluate::curvature_label(options.at), || {
-                    evaluate::curvature(points, &surface, &options, &jet, false)
-                });
                 let summary = Summary {
                     scale,
                     normals_source,
@@ -336,7 +334,7 @@ pub(crate) fn project<'py>(
                     pipeline::fixed_surface,
                 )?;
                 let out = t.time("projection", || {
-                    evaluate::projection(points, &built.surface, false)
+                    evaluate::projection(points, &built.surface, &NoProgress)
                 });
                 let summary = Summary {
                     scale: built.scale,

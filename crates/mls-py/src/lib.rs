@@ -2,7 +2,7 @@
 //! (`pip install ./crates/mls-py`).
 //!
 //! Every function runs the steps of the `mlscurv` command of the same name through
-//! [`mls_cli`]'s library (the same h, normals, surface and streamed evaluation), so that the
+//! [`mls_pipeline`] (the same h, normals, surface and streamed evaluation), so that the
 //! numbers are the command's bit for bit and the errors carry its messages; the array named
 //! `points` (or `normals`) stands where the command names the file. This crate only converts:
 //! numpy arrays in (a float64 C-contiguous (N, 3) array is borrowed, not copied), numpy arrays
@@ -14,7 +14,7 @@
 //! module.
 //!
 //! Architecture invariant: no geometry and no pipeline step is written here; a step missing
-//! from `mls_cli` is added there, for the binary and this module alike.
+//! from `mls_pipeline` is added there, for the binary and this module alike.
 
 mod files;
 mod functions;
@@ -24,10 +24,11 @@ mod tiles;
 use std::borrow::Cow;
 use std::ffi::CString;
 
-use mls_cli::pipeline::{self, Scale, Timings};
-use mls_cli::{At, Format, Method};
 use mls_core::normals::{DEFAULT_H_FACTOR, Orientation};
 use mls_core::{Cutoff, Point, PointStatus};
+use mls_io::FileFormat;
+use mls_pipeline::pipeline::{self, Scale, Timings};
+use mls_pipeline::{At, Method};
 use numpy::{PyArray2, PyArrayMethods, PyUntypedArrayMethods};
 use pyo3::exceptions::{PyTypeError, PyUserWarning, PyValueError};
 use pyo3::prelude::*;
@@ -187,13 +188,13 @@ fn cutoff(arg: Option<CutoffArg>) -> PyResult<Cutoff> {
         Some(CutoffArg::Factor(c)) => c.to_string(),
         Some(CutoffArg::Text(s)) => s,
     };
-    mls_cli::parse_cutoff(&text).map_err(|e| PyValueError::new_err(format!("cutoff: {e}")))
+    mls_pipeline::parse_cutoff(&text).map_err(|e| PyValueError::new_err(format!("cutoff: {e}")))
 }
 
 /// `h` and `h_factor`, which exclude each other as `--h` and `--h-factor` do.
 fn scale_options(h: Option<f64>, h_factor: Option<f64>) -> PyResult<(Option<f64>, f64)> {
     let check = |name: &str, v: f64| {
-        mls_cli::positive_finite(&v.to_string())
+        mls_pipeline::positive_finite(&v.to_string())
             .map_err(|e| PyValueError::new_err(format!("{name}: {e}")))
     };
     match (h, h_factor) {
@@ -207,7 +208,7 @@ fn scale_options(h: Option<f64>, h_factor: Option<f64>) -> PyResult<(Option<f64>
 }
 
 fn orient(s: &str) -> PyResult<Orientation> {
-    mls_cli::parse_orient(s).map_err(|e| PyValueError::new_err(format!("orient: {e}")))
+    mls_pipeline::parse_orient(s).map_err(|e| PyValueError::new_err(format!("orient: {e}")))
 }
 
 fn threads(n: Option<usize>) -> PyResult<Option<u16>> {
@@ -239,13 +240,13 @@ fn at(s: &str) -> PyResult<At> {
     }
 }
 
-fn format(s: Option<&str>) -> PyResult<Option<Format>> {
+fn format(s: Option<&str>) -> PyResult<Option<FileFormat>> {
     s.map(|s| match s.to_ascii_lowercase().as_str() {
-        "ply" => Ok(Format::Ply),
-        "xyz" => Ok(Format::Xyz),
-        "csv" => Ok(Format::Csv),
-        "las" => Ok(Format::Las),
-        "laz" => Ok(Format::Laz),
+        "ply" => Ok(FileFormat::Ply),
+        "xyz" => Ok(FileFormat::Xyz),
+        "csv" => Ok(FileFormat::Csv),
+        "las" => Ok(FileFormat::Las),
+        "laz" => Ok(FileFormat::Laz),
         _ => Err(PyValueError::new_err(format!(
             "format: expected \"ply\", \"xyz\", \"csv\", \"las\" or \"laz\", got {s:?}"
         ))),
@@ -351,7 +352,7 @@ fn _mlscurv(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     m.add(
         "_MIN_OVERLAP_AGREEMENT",
-        mls_cli::tiled::MIN_OVERLAP_AGREEMENT,
+        mls_pipeline::tiled::MIN_OVERLAP_AGREEMENT,
     )?;
     Ok(())
 }

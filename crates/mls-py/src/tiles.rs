@@ -1,13 +1,13 @@
 //! The private pieces of `mlscurv.dask`: the tile plan, the reach, the capacity of a memory
 //! budget and one tile's curvature, each a thin call into `mls_core::tiling` or
-//! `mls_cli::tiled`, so that the Dask graph and the binary's out-of-core run cut a cloud by
+//! `mls_pipeline::tiled`, so that the Dask graph and the binary's out-of-core run cut a cloud by
 //! the same rules (written once, in Rust).
 
-use mls_cli::tiled::{self, TileResult};
-use mls_cli::{At, CurvatureOptions, Method, NormalsMode, SurfaceOptions, pipeline};
 use mls_core::normals::DEFAULT_H_FACTOR;
 use mls_core::tiling::{self, Grid, TilePlan};
 use mls_core::{Frame, Point, Vector};
+use mls_pipeline::tiled::{self, TileResult};
+use mls_pipeline::{At, CurvatureOptions, Method, NormalsMode, SurfaceOptions, pipeline};
 use numpy::{IntoPyArray, PyArray1, PyArrayMethods};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
@@ -86,11 +86,11 @@ pub(crate) fn _reach(
     method: &str,
     estimated_normals: bool,
 ) -> PyResult<f64> {
-    let h = mls_cli::positive_finite(&h.to_string())
+    let h = mls_pipeline::positive_finite(&h.to_string())
         .map_err(|e| PyValueError::new_err(format!("h: {e}")))?;
     let cutoff = crate::cutoff(cutoff)?;
     let jet = (crate::method(method)? == Method::Jet)
-        .then(|| mls_cli::evaluate::jet_config(!estimated_normals));
+        .then(|| mls_pipeline::evaluate::jet_config(!estimated_normals));
     tiling::reach(h, cutoff, jet.as_ref(), estimated_normals).ok_or_else(|| {
         PyValueError::new_err(
             "cutoff: a tiled run needs a kernel cutoff (cutoff=None reaches every point)",
@@ -432,7 +432,6 @@ pub(crate) fn _tile_curvature<'py>(
         )));
     }
     let from_file = normals.is_some();
-    let jet = (options.method == Method::Jet).then(|| mls_cli::evaluate::jet_config(from_file));
     let frame = Frame::of_box(vector(lo), vector(hi));
     let (result, timings) = py
         .detach(|| {
@@ -447,7 +446,6 @@ pub(crate) fn _tile_curvature<'py>(
                         orientation,
                         frame,
                         &options,
-                        jet.as_ref(),
                         name,
                     )
                 })?;

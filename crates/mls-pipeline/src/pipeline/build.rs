@@ -15,7 +15,7 @@ use super::{
     Carried, MIN_POINTS, Normals, Scale, Timings, check_file_normals, check_scale, choose_h_on,
     input_name, normals, print_warning, read, scan_viewpoints,
 };
-use crate::{Format, SurfaceOptions};
+use crate::SurfaceOptions;
 
 /// The surface `mlscurv eval` evaluates: the cloud's own `normals` (every one non-zero), h
 /// given or from the spacing (the default factor), checked against the cloud (its warnings
@@ -116,30 +116,63 @@ impl<S, F: for<'a> FnOnce(IndexedCloud<'a>, &[Vector], f64, Cutoff) -> Result<S,
 {
 }
 
-/// Reads the input, then builds the surface as [`build_surface`] does, timing each stage and
-/// printing the warnings on stderr.
-pub fn prepare<S>(
+/// A cloud read from a file, before any work: its points in file order, the file's normals,
+/// each point's scanner ([`scan_viewpoints`]) and what the points carry to the output.
+#[derive(Debug)]
+pub struct Loaded {
+    pub points: Vec<Point>,
+    pub normals: Option<Vec<[f64; 3]>>,
+    pub viewpoints: Option<Vec<Point>>,
+    /// The input's attributes and LAS layout (all of them: the command drops them for
+    /// `--no-attributes`).
+    pub carried: Carried,
+}
+
+/// Reads the input (timed as `read`), printing the reader's notes on stderr.
+pub fn load(
     input: &Path,
-    format: Option<Format>,
+    format: Option<mls_io::FileFormat>,
     columns: Option<&mls_io::ColumnNames>,
-    s: &SurfaceOptions,
     t: &mut Timings,
-    build: impl BuildSurface<S>,
-) -> Result<Prepared<S>> {
+) -> Result<Loaded> {
     let cloud = t.time("read", || read(input, format, columns))?;
     let viewpoints = scan_viewpoints(&cloud);
     let PointCloud {
         points,
-        normals: file_normals,
+        normals,
         attributes,
         las,
         scans: _,
     } = cloud;
     // `[f64; 3]` and `Point` have the same layout: the conversion reuses the buffer.
     let points: Vec<Point> = points.into_iter().map(Point::from).collect();
+    Ok(Loaded {
+        points,
+        normals,
+        viewpoints,
+        carried: Carried::new(attributes, las, true),
+    })
+}
+
+/// Reads the input ([`load`]), then builds the surface as [`build_surface`] does, timing each
+/// stage and printing the warnings on stderr.
+pub fn prepare<S>(
+    input: &Path,
+    format: Option<mls_io::FileFormat>,
+    columns: Option<&mls_io::ColumnNames>,
+    s: &SurfaceOptions,
+    t: &mut Timings,
+    build: impl BuildSurface<S>,
+) -> Result<Prepared<S>> {
+    let Loaded {
+        points,
+        normals,
+        viewpoints,
+        carried,
+    } = load(input, format, columns, t)?;
     let built = build_surface(
         &points,
-        file_normals,
+        normals,
         viewpoints.as_deref(),
         &input_name(input),
         s,
@@ -150,7 +183,7 @@ pub fn prepare<S>(
     Ok(Prepared {
         points,
         built,
-        carried: Carried::new(attributes, las, true),
+        carried,
     })
 }
 

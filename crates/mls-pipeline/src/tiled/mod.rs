@@ -376,7 +376,7 @@ pub fn curvature(run: &TiledRun<'_>, t: &mut Timings) -> Result<TiledSummary> {
     // 4. Each tile.
     let orientation = s.orient.unwrap_or(Orientation::Up);
     let mut normals_source = String::new();
-    let bar = crate::progress::Bar::new(n as usize, "curvature", t.show());
+    let bar = t.progress().bar(n as usize, "curvature");
     let mut done = 0usize;
     // The file normals' agreement, summed over tiles weighted by their own points.
     let mut agreement = (0.0, 0u64);
@@ -394,7 +394,6 @@ pub fn curvature(run: &TiledRun<'_>, t: &mut Timings) -> Result<TiledSummary> {
                 s.orient.is_none(),
                 frame,
                 options,
-                jet.as_ref(),
                 &name,
             )?;
             if normals_source.is_empty() {

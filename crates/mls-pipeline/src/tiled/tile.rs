@@ -68,21 +68,10 @@ pub fn tile_curvature(
     orientation: Orientation,
     frame: Frame,
     options: &CurvatureOptions,
-    jet: Option<&mls_core::JetConfig>,
     name: &str,
 ) -> Result<TileResult> {
     let orient = Orient::Rule(orientation);
-    tile_curvature_oriented(
-        points,
-        file_normals,
-        core,
-        h,
-        &orient,
-        frame,
-        options,
-        jet,
-        name,
-    )
+    tile_curvature_oriented(points, file_normals, core, h, &orient, frame, options, name)
 }
 
 /// How a tile's estimated normals are oriented.
@@ -104,7 +93,6 @@ pub(super) fn tile_curvature_oriented(
     orient: &Orient,
     frame: Frame,
     options: &CurvatureOptions,
-    jet: Option<&mls_core::JetConfig>,
     name: &str,
 ) -> Result<TileResult> {
     let from_file = file_normals.is_some();
@@ -150,13 +138,12 @@ pub(super) fn tile_curvature_oriented(
             pipeline::surface_in(points, normals.normals, h, s.cutoff, frame, name, build)?;
         (surface, None)
     };
-    let default_jet = evaluate::jet_config(from_file);
-    let columns = evaluate::curvature(
+    let (columns, _) = crate::curvature_on(
         &queries,
         &surface,
+        from_file,
         options,
-        jet.unwrap_or(&default_jet),
-        false,
+        &crate::progress::NoProgress,
     );
     Ok(TileResult {
         columns,
@@ -183,7 +170,6 @@ pub(super) fn evaluate_tile(
     default_orientation: bool,
     frame: Frame,
     options: &CurvatureOptions,
-    jet: Option<&mls_core::JetConfig>,
     name: &str,
 ) -> Result<(String, Option<f64>)> {
     let path = work.path(&format!("tile{tile}.pts"));
@@ -227,7 +213,6 @@ pub(super) fn evaluate_tile(
         &orient,
         frame,
         options,
-        jet,
         &tile_name,
     )?;
     if !from_file && default_orientation && !towards_scanners {

@@ -7,7 +7,6 @@ use std::path::{Path, PathBuf};
 use anyhow::{Result, anyhow, bail};
 use mls_io::{Attribute, Column, FileFormat, LasTemplate, PlyFormat};
 
-use crate::Format;
 use crate::pipeline::{STDOUT_NAME, format_name, input_name, is_stdio};
 
 /// The column PLY output repeats as the vertex property `quality`, the one per-vertex value
@@ -105,12 +104,11 @@ pub fn write_stdout(bytes: &[u8]) -> Result<()> {
 pub fn check_output(
     inputs: &[&Path],
     path: &Path,
-    format: Option<Format>,
+    format: Option<FileFormat>,
     force: bool,
     ascii: bool,
     stdout_default: Option<FileFormat>,
 ) -> Result<Output> {
-    let format = format.map(FileFormat::from);
     if format == Some(FileFormat::E57) || FileFormat::from_path(path) == Some(FileFormat::E57) {
         bail!(
             "{}: E57 is an input format only; write .ply, .csv, .xyz, .las or .laz",

@@ -8,7 +8,7 @@ use mls_core::{
 use mls_io::{Axis, Column};
 
 use crate::pipeline::Surface;
-use crate::progress::{Bar, CHUNK};
+use crate::progress::{CHUNK, Progress};
 use crate::{At, CurvatureOptions, Method, status_code};
 
 const NAN3: [f64; 3] = [f64::NAN; 3];
@@ -156,7 +156,7 @@ impl CurvatureColumns {
 }
 
 /// Evaluates `surface` at every one of `points` through mls-core's streams, in chunks of
-/// [`CHUNK`] results, drawing a progress bar on stderr if `show`. The binary and the Python
+/// [`CHUNK`] results, moving a bar of `progress`. The binary and the Python
 /// package both go through here, so they give the same columns; the results do not depend on
 /// the chunk (see `mls_core::stream`).
 ///
@@ -167,12 +167,12 @@ pub fn curvature(
     surface: &Surface,
     options: &CurvatureOptions,
     jet: &JetConfig,
-    show: bool,
+    progress: &dyn Progress,
 ) -> CurvatureColumns {
     let par = Parallelism::Rayon;
     let n = points.len();
     let mut out = CurvatureColumns::new(n, options);
-    let bar = Bar::new(n, curvature_label(options.at), show);
+    let bar = progress.bar(n, curvature_label(options.at));
     let mut done = 0;
     match surface {
         Surface::Fixed(surface) if options.method == Method::Jet => {
@@ -264,7 +264,7 @@ pub struct Projection {
 
 /// Projects every one of `points` onto `surface` through mls-core's stream, as `mlscurv
 /// project` does.
-pub fn projection(points: &[Point], surface: &MlsSurface, show: bool) -> Projection {
+pub fn projection(points: &[Point], surface: &MlsSurface, progress: &dyn Progress) -> Projection {
     let par = Parallelism::Rayon;
     let n = points.len();
     // A failed point keeps its input position and has no normal.
@@ -274,7 +274,7 @@ pub fn projection(points: &[Point], surface: &MlsSurface, show: bool) -> Project
         status: vec![0; n],
         moved: Vec::new(),
     };
-    let bar = Bar::new(n, "projection", show);
+    let bar = progress.bar(n, "projection");
     let mut done = 0;
     surface.projection_stream(points, par, CHUNK, |indices, results| {
         for (&i, r) in indices.iter().zip(results) {

@@ -10,7 +10,6 @@ use mls_core::Point;
 use mls_io::{FileFormat, PointCloud, ReadError};
 
 use super::MIN_POINTS;
-use crate::Format;
 
 /// The path that means standard input (as an input) or standard output (as `-o`).
 const STDIO: &str = "-";
@@ -50,7 +49,7 @@ pub fn format_name(format: FileFormat) -> &'static str {
 /// `--quiet`: they say how the columns were understood.
 pub fn read_any(
     path: &Path,
-    format: Option<Format>,
+    format: Option<FileFormat>,
     columns: Option<&mls_io::ColumnNames>,
 ) -> Result<PointCloud> {
     let mls_io::ReadOutcome { cloud, notes } = read_outcome(path, format, columns)?;
@@ -62,7 +61,7 @@ pub fn read_any(
 
 /// Reads a cloud whose columns beyond x, y, z do not matter (eval's queries), without the
 /// reader's notes.
-pub fn read_quietly(path: &Path, format: Option<Format>) -> Result<PointCloud> {
+pub fn read_quietly(path: &Path, format: Option<FileFormat>) -> Result<PointCloud> {
     Ok(read_outcome(path, format, None)?.cloud)
 }
 
@@ -71,7 +70,7 @@ pub fn read_quietly(path: &Path, format: Option<Format>) -> Result<PointCloud> {
 /// `--columns`, if given, name the columns of a text input, from a file or standard input.
 pub fn read_outcome(
     path: &Path,
-    format: Option<Format>,
+    format: Option<FileFormat>,
     columns: Option<&mls_io::ColumnNames>,
 ) -> Result<mls_io::ReadOutcome> {
     let options = mls_io::ReadOptions {
@@ -89,11 +88,11 @@ pub fn read_outcome(
             .lock()
             .read_to_end(&mut bytes)
             .map_err(|e| anyhow!("{STDIN_NAME}: {e}"))?;
-        let format = format.map_or_else(|| sniff(&bytes), FileFormat::from);
+        let format = format.unwrap_or_else(|| sniff(&bytes));
         mls_io::read_point_cloud_from_with(&bytes[..], STDIN_NAME, format, &options)?
     } else {
         match format {
-            Some(format) => mls_io::read_point_cloud_as_with(path, format.into(), &options)?,
+            Some(format) => mls_io::read_point_cloud_as_with(path, format, &options)?,
             None => mls_io::read_point_cloud_with(path, &options).map_err(|e| match e {
                 ReadError::NoExtension { .. } | ReadError::UnknownExtension { .. } => {
                     anyhow!("{e}; or name the format with --input-format ply|xyz|csv|las|laz|e57")
@@ -144,7 +143,7 @@ fn sniff(bytes: &[u8]) -> FileFormat {
 /// Reads a cloud (see [`read_any`]) and checks it has enough points.
 pub fn read(
     path: &Path,
-    format: Option<Format>,
+    format: Option<FileFormat>,
     columns: Option<&mls_io::ColumnNames>,
 ) -> Result<PointCloud> {
     let cloud = read_any(path, format, columns)?;

@@ -10,14 +10,17 @@ mod input;
 mod oriented;
 mod scale;
 
+use std::sync::Arc;
 use std::time::Instant;
 
 use anyhow::{Context, Result};
 use mls_core::PointStatus;
 
+use crate::progress::{NoProgress, Progress};
+
 pub use self::build::{
-    BuildSurface, Built, Prepared, Surface, build_surface, eval_surface, fixed_surface, index,
-    prepare, surface, surface_in,
+    BuildSurface, Built, Loaded, Prepared, Surface, build_surface, eval_surface, fixed_surface,
+    index, load, prepare, surface, surface_in,
 };
 pub(crate) use self::input::is_stdio;
 pub use self::input::{
@@ -53,25 +56,31 @@ impl std::fmt::Display for Length {
 /// besides the centre, the MLS evaluation at least 3 samples.
 pub const MIN_POINTS: usize = 4;
 
-/// Wall-clock time of the named stages, for the summary, and whether to show a spinner on
-/// stderr while one runs ([`Timings::default`] shows none).
-#[derive(Debug, Default)]
-pub struct Timings(pub Vec<(&'static str, f64)>, bool);
+/// Wall-clock time of the named stages, for the summary, and the progress shown while one runs
+/// ([`Timings::default`] shows none).
+#[derive(Debug)]
+pub struct Timings(pub Vec<(&'static str, f64)>, Arc<dyn Progress>);
+
+impl Default for Timings {
+    fn default() -> Self {
+        Self::new(Arc::new(NoProgress))
+    }
+}
 
 impl Timings {
-    /// Timings that show progress if `show` (stderr a terminal and no `--quiet`).
-    pub fn new(show: bool) -> Self {
-        Self(Vec::new(), show)
+    /// Timings that show their stages through `progress`.
+    pub fn new(progress: Arc<dyn Progress>) -> Self {
+        Self(Vec::new(), progress)
     }
 
-    /// Whether progress is shown.
-    pub fn show(&self) -> bool {
-        self.1
+    /// Where progress is shown, for a stage that draws its own ([`Self::measure`]).
+    pub fn progress(&self) -> Arc<dyn Progress> {
+        Arc::clone(&self.1)
     }
 
-    /// Runs and times `stage` under a spinner.
+    /// Runs and times `stage`, shown as a stage without a count ([`Progress::stage`]).
     pub fn time<T>(&mut self, stage: &'static str, f: impl FnOnce() -> T) -> T {
-        let _spinner = crate::progress::Spinner::new(stage, self.1);
+        let _stage = self.1.stage(stage);
         self.measure(stage, f)
     }
 
