@@ -17,12 +17,12 @@ const CENTRE: [f64; 3] = [10.0, -3.0, 2.0];
 const LATTICE: usize = 4000;
 
 /// A scan: its pose (`w, x, y, z` unit quaternion, translation = the scanner's position).
-struct Pose {
+pub(crate) struct Pose {
     rotation: [f64; 4],
     origin: [f64; 3],
 }
 
-fn poses() -> [Pose; 2] {
+pub(crate) fn poses() -> [Pose; 2] {
     let unit = |q: [f64; 4]| {
         let n = q.iter().map(|c| c * c).sum::<f64>().sqrt();
         q.map(|c| c / n)
@@ -48,7 +48,7 @@ fn rotate([w, x, y, z]: [f64; 4], p: Vector3<f64>) -> Vector3<f64> {
 
 /// The sphere's lattice points in world coordinates, with the scan that sees each (the first
 /// that does; points neither scanner sees are left out).
-fn scanned_points(poses: &[Pose]) -> Vec<(Vector3<f64>, usize)> {
+pub(crate) fn scanned_points(poses: &[Pose]) -> Vec<(Vector3<f64>, usize)> {
     let centre = Vector3::from(CENTRE);
     let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
     (0..LATTICE)
@@ -67,7 +67,7 @@ fn scanned_points(poses: &[Pose]) -> Vec<(Vector3<f64>, usize)> {
 }
 
 /// Writes the scans, each point in its scanner's frame (`R^T (p − t)`) with an intensity.
-fn write_scans(path: &Path, poses: &[Pose], points: &[(Vector3<f64>, usize)]) {
+pub(crate) fn write_scans(path: &Path, poses: &[Pose], points: &[(Vector3<f64>, usize)]) {
     let mut writer = E57Writer::from_file(path, "sphere-file").unwrap();
     for (s, pose) in poses.iter().enumerate() {
         let prototype = vec![

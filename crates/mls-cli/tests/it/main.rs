@@ -21,6 +21,7 @@ mod normals;
 mod orient_default;
 mod overwrite;
 mod project;
+mod readme;
 mod reference;
 mod render;
 mod sphere;
