@@ -35,8 +35,9 @@ use crate::cloud::IndexedCloud;
 use crate::curvature::Curvature;
 use crate::error::ConfigError;
 use crate::math::{Point, Vector};
+use crate::par::Parallelism;
 use crate::status::PointStatus;
-use crate::surface::{MlsConfig, MlsSurface, Parallelism};
+use crate::surface::{MlsConfig, MlsSurface};
 
 /// `C` in the predicted scatter `C σ / (h² √(2 Σw))` of each principal curvature under
 /// position noise σ, for the Gaussian kernel with cutoff 5h. Measured on noisy planes (the

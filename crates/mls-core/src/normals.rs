@@ -44,8 +44,8 @@ pub(crate) use spacing::{spacing_of_local, spacing_on_tree, stride};
 use crate::cloud::IndexedCloud;
 use crate::error::InputError;
 use crate::math::{Point, Vector};
+use crate::par::Parallelism;
 use crate::status::PointStatus;
-use crate::surface::Parallelism;
 
 /// The default neighbourhood size of normal estimation and orientation.
 ///

@@ -19,8 +19,9 @@ use crate::adaptive::{AdaptiveResult, AdaptiveSurface, Location};
 use crate::frame::morton_key;
 use crate::jet::{JetConfig, JetPoint};
 use crate::math::{Point, Vector};
+use crate::par::Parallelism;
 use crate::status::PointStatus;
-use crate::surface::{MlsSurface, Parallelism, PointResult};
+use crate::surface::{MlsSurface, PointResult};
 
 /// A chunk size that keeps rayon's per-call set-up negligible and one chunk's results (about
 /// 1.2 KB a point while they are collected) a small part of a large run's memory.

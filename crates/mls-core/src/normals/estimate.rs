@@ -6,8 +6,8 @@ use nalgebra::SymmetricEigen;
 
 use super::{NeighbourGraph, NormalsError, check_points, check_scale, check_tolerance};
 use crate::math::{Matrix, Point, UnitNormal, Vector};
+use crate::par::Parallelism;
 use crate::status::PointStatus;
-use crate::surface::Parallelism;
 
 /// Default relative eigenvalue gap below which a normal is undefined: `λ1 − λ0 ≤ 10⁻⁶ λ2`.
 ///

@@ -9,7 +9,7 @@ use super::NormalsError;
 use crate::cloud::IndexedCloud;
 use crate::error::InputError;
 use crate::math::Point;
-use crate::surface::Parallelism;
+use crate::par::Parallelism;
 
 /// The `k` nearest neighbours of every point, the point itself excluded, nearest first.
 ///

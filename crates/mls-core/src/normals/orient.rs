@@ -13,8 +13,8 @@ use tree::orient_along_tree;
 
 use super::{NeighbourGraph, NormalEstimate, NormalsError, check_points};
 use crate::math::{Point, Vector};
+use crate::par::Parallelism;
 use crate::status::PointStatus;
-use crate::surface::Parallelism;
 
 /// How [`orient_normals`] chooses the sign of each connected component.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]

@@ -7,7 +7,7 @@ use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use super::{NormalsError, bounding_box_centre, check_points, check_scale};
 use crate::error::InputError;
 use crate::math::{Matrix, Point, Vector};
-use crate::surface::Parallelism;
+use crate::par::Parallelism;
 
 /// Neighbours per point that [`spacing_statistics`] uses by default.
 ///

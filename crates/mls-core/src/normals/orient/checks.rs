@@ -10,7 +10,7 @@ use super::{Facing, Rule, check_lengths, is_canonical};
 use crate::cloud::IndexedCloud;
 use crate::math::{Point, Vector};
 use crate::normals::{NeighbourGraph, NormalsError};
-use crate::surface::Parallelism;
+use crate::par::Parallelism;
 
 /// The fraction of graph edges whose normals agree in sign, `n_i · n_j > 0`, among the edges
 /// that can tell (`sign_agreement`).

@@ -7,8 +7,8 @@ use rayon::prelude::*;
 use super::{Rule, is_canonical};
 use crate::math::{Point, Vector, bounding_box_centre};
 use crate::normals::{NeighbourGraph, NormalEstimate};
+use crate::par::Parallelism;
 use crate::status::PointStatus;
-use crate::surface::Parallelism;
 
 /// Kruskal's minimum spanning forest, then a traversal of each tree from its seed.
 /// Returns (components, patches, flipped).
