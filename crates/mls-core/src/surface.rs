@@ -22,14 +22,14 @@ pub use crate::frame::Frame;
 use crate::frame::morton_key;
 use crate::jet::anchors::{ANCHOR_CELL, Anchors};
 use crate::jet::{JetConfig, JetPoint, NormalData};
-
-/// The anchors' jets evaluated so far, by anchor.
-pub(crate) type AnchorCache = std::collections::HashMap<u32, Result<JetPoint, PointStatus>>;
 use crate::kernel::{Cutoff, Kernel};
 use crate::math::{Point, UnitNormal, Vector};
 pub use crate::par::Parallelism;
 use crate::projection::ProjectionConfig;
 use crate::status::PointStatus;
+
+/// The anchors' jets evaluated so far, by anchor.
+pub(crate) type AnchorCache = std::collections::HashMap<u32, Result<JetPoint, PointStatus>>;
 
 /// Parameters of the MLS surface.
 #[derive(Clone, Copy, Debug, PartialEq)]
