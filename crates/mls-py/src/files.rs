@@ -127,7 +127,7 @@ pub(crate) fn read<'py>(
     let options = ReadOptions { columns };
     let outcome = py
         .detach(|| match format {
-            Some(f) => mls_io::read_point_cloud_as_with(&path, f.into(), &options),
+            Some(f) => mls_io::read_point_cloud_as_with(&path, f, &options),
             None => mls_io::read_point_cloud_with(&path, &options),
         })
         .map_err(|e| match e {
