@@ -79,10 +79,9 @@ struct Run {
     out: CurvatureColumns,
 }
 
-/// `mlscurv curvature` on `points` with the default options but `method`, `at` and
-/// `adaptive`: the binary's and the Python package's calls.
-fn command(cloud: &Cloud, method: Method, at: At, adaptive: bool) -> Result<Run> {
-    let options = CurvatureOptions {
+/// The command's options with every default but `method`, `at` and `adaptive`.
+fn default_options(method: Method, at: At, adaptive: bool) -> Result<CurvatureOptions> {
+    Ok(CurvatureOptions {
         surface: SurfaceOptions {
             h: None,
             h_factor: mls_core::normals::DEFAULT_H_FACTOR,
@@ -94,7 +93,13 @@ fn command(cloud: &Cloud, method: Method, at: At, adaptive: bool) -> Result<Run>
         method,
         at,
         adaptive,
-    };
+    })
+}
+
+/// `mlscurv curvature` on `points` with the default options but `method`, `at` and
+/// `adaptive`: the binary's and the Python package's calls.
+fn command(cloud: &Cloud, method: Method, at: At, adaptive: bool) -> Result<Run> {
+    let options = default_options(method, at, adaptive)?;
     let run = mls_pipeline::curvature(
         mls_pipeline::Cloud {
             points: &cloud.points,
@@ -822,19 +827,7 @@ fn check_tiled(
     } else {
         "tiled-out.las"
     });
-    let options = CurvatureOptions {
-        surface: SurfaceOptions {
-            h: None,
-            h_factor: mls_core::normals::DEFAULT_H_FACTOR,
-            cutoff: mls_pipeline::parse_cutoff(mls_pipeline::DEFAULT_CUTOFF)
-                .map_err(anyhow::Error::msg)?,
-            normals: NormalsMode::Auto,
-            orient: None,
-        },
-        method,
-        at: At::Input,
-        adaptive: false,
-    };
+    let options = default_options(method, At::Input, false)?;
     let run = mls_pipeline::tiled::TiledRun {
         input: &input,
         input_format: mls_io::FileFormat::Las,

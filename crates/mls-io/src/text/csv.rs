@@ -237,17 +237,7 @@ pub(crate) fn csv_pass<E: From<ReadError>>(
             }
         }
     }
-    if let Some((stated, line)) = stated
-        && stated != rows
-    {
-        return Err(ReadError::CountMismatch {
-            file: name.to_owned(),
-            line,
-            stated,
-            found: rows,
-        }
-        .into());
-    }
+    super::check_count(name, stated, rows)?;
     if let Pass::Batches { handed, .. } = pass
         && (!*handed || !cloud.points.is_empty())
     {

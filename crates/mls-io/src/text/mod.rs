@@ -447,6 +447,24 @@ pub(crate) fn read_xyz_slots(
     })
 }
 
+/// [`ReadError::CountMismatch`] where a point-count line `stated` (count, line) disagrees
+/// with the `rows` read.
+pub(crate) fn check_count(
+    name: &str,
+    stated: Option<(u64, usize)>,
+    rows: u64,
+) -> Result<(), ReadError> {
+    match stated {
+        Some((stated, line)) if stated != rows => Err(ReadError::CountMismatch {
+            file: name.to_owned(),
+            line,
+            stated,
+            found: rows,
+        }),
+        _ => Ok(()),
+    }
+}
+
 /// One pass over a headerless text file ([`read_xyz_slots`]) as `pass` says: the cloud (empty
 /// unless [`Pass::Whole`]) and what was learnt of its columns.
 fn xyz_pass<E: From<ReadError>>(
@@ -687,17 +705,7 @@ fn xyz_pass<E: From<ReadError>>(
             }
         }
     }
-    if let Some((stated, line)) = stated
-        && stated != rows
-    {
-        return Err(ReadError::CountMismatch {
-            file: name.to_owned(),
-            line,
-            stated,
-            found: rows,
-        }
-        .into());
-    }
+    check_count(name, stated, rows)?;
     if let Pass::Batches { handed, .. } = pass
         && (!*handed || !cloud.points.is_empty())
     {

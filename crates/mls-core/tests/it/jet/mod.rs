@@ -179,23 +179,29 @@ fn heights_only(
     ((sum / count as f64).sqrt() / 0.5, outliers)
 }
 
-/// Heights only (no file normals) under position noise of 0.2 spacing: the degree-2
-/// candidates take the k1 error well below the degree-4 ladder's (measured on this cloud:
-/// 2.4e-2 against 2.0e-1; `docs/accuracy-noisy.md` for the peers).
-#[test]
-fn degree_two_candidates_win_under_noise_without_normals() {
+/// The 20k random torus, clean and with position noise of 0.2 spacing (0.1 h), with normals
+/// perturbed by 0.2 rad (the frame only: noisy, as estimated ones would be), and h.
+fn noisy_torus() -> (Vec<Point>, Vec<Point>, Vec<Vector>, f64) {
     let torus = Torus::new(6.0, 2.0);
     let samples =
         mls_shapes::surface_points(&mls_shapes::random_area_uniform(&torus, 20_000, SEED));
     let clean: Vec<Point> = samples.iter().map(|s| s.point).collect();
     let h = cli_h(&clean);
     let noisy: Vec<Point> = mls_shapes::add_position_noise(&clean, 0.1 * h, SEED);
-    // The frame only: noisy normals, as estimated ones would be.
     let normals = mls_shapes::perturb_normals(
         &samples.iter().map(|s| s.normal).collect::<Vec<_>>(),
         0.2,
         SEED,
     );
+    (clean, noisy, normals, h)
+}
+
+/// Heights only (no file normals) under position noise of 0.2 spacing: the degree-2
+/// candidates take the k1 error well below the degree-4 ladder's (measured on this cloud:
+/// 2.4e-2 against 2.0e-1; `docs/accuracy-noisy.md` for the peers).
+#[test]
+fn degree_two_candidates_win_under_noise_without_normals() {
+    let (_, noisy, normals, h) = noisy_torus();
     let config = JetConfig {
         normals: NormalData::Ignore,
         ..JetConfig::default()
@@ -255,17 +261,7 @@ fn outliers_are_flagged_and_do_not_spoil_their_neighbours() {
 /// one's.
 #[test]
 fn shared_supports_blend_under_noise_only() {
-    let torus = Torus::new(6.0, 2.0);
-    let samples =
-        mls_shapes::surface_points(&mls_shapes::random_area_uniform(&torus, 20_000, SEED));
-    let clean: Vec<Point> = samples.iter().map(|s| s.point).collect();
-    let h = cli_h(&clean);
-    let noisy: Vec<Point> = mls_shapes::add_position_noise(&clean, 0.1 * h, SEED);
-    let normals = mls_shapes::perturb_normals(
-        &samples.iter().map(|s| s.normal).collect::<Vec<_>>(),
-        0.2,
-        SEED,
-    );
+    let (clean, noisy, normals, h) = noisy_torus();
     let shared = JetConfig {
         normals: NormalData::Ignore,
         ..JetConfig::default()
